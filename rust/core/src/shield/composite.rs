@@ -1,0 +1,359 @@
+//! The soft-min composite barrier of the paper, Sec. III-C, in one fused pass over the scan:
+//!
+//! `H = −(γ/κ) log Σ_i exp(−κ tanh(h_i/γ))`,
+//! `∂H/∂p = Σ_i λ_i sech²(h_i/γ) ∂h_i/∂p`, `∂H/∂t = Σ_i λ_i sech²(h_i/γ) ∂h_i/∂t`,
+//! `λ_i = exp(−κ tanh(h_i/γ)) / Σ_j exp(−κ tanh(h_j/γ))`.
+//!
+//! Numerics: a first pass finds `min h_i` (and rejects NaN/inf); the log-sum-exp is shifted
+//! by the largest exponent `−κ tanh(h_min/γ)`, so every term lies in `[e^{−2κ}, 1]` and the
+//! sum is at least 1: nothing overflows at any κ and `log` never sees 0. `tanh` and `sech²`
+//! come from one `e = exp(−2|x|)`: `tanh x = sign(x)(1−e)/(1+e)`, `sech² x = 4e/(1+e)²`,
+//! accurate in relative terms where `1 − tanh²` would cancel to 0. The reported `H` is
+//! finally capped by `γ tanh(h_min/γ)`, the bound of the paper's Remark 1, so `H ≥ 0 ⇒ h_i ≥ 0`
+//! holds for the returned numbers exactly, not just up to rounding.
+//!
+//! Accuracy: the `f64` kernel agrees with a direct `f64` evaluation to about 1e-13 relative;
+//! the `f32` kernel (used for `f32` scans) to about 1e-5 absolute in `H` and 1e-4 relative in
+//! the gradient for N ≤ 20,000 (pinned by tests).
+//!
+//! Speed: the loops are written over fixed-width lane blocks so the compiler vectorises them;
+//! [`SimdLevel`] picks an AVX-512 or AVX2+FMA build of the same code at run time (the wheel is
+//! built without `target-cpu=native`).
+
+use super::ellipsoid::Envelope;
+use super::lane::Lane;
+use crate::error::{Error, Result};
+use crate::math::Vec3;
+
+/// Instruction-set level the composite kernel runs at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SimdLevel {
+    /// The baseline target (SSE2 on x86-64): portable, slowest.
+    Portable,
+    /// x86-64 AVX2 + FMA.
+    Avx2,
+    /// x86-64 AVX-512 (F, VL, DQ).
+    Avx512,
+}
+
+impl SimdLevel {
+    /// The best level this CPU supports.
+    pub fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+                && std::arch::is_x86_feature_detected!("avx512dq")
+            {
+                return SimdLevel::Avx512;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+                return SimdLevel::Avx2;
+            }
+        }
+        SimdLevel::Portable
+    }
+
+    /// Whether this CPU can run `self`.
+    pub fn is_supported(self) -> bool {
+        match self {
+            SimdLevel::Portable => true,
+            SimdLevel::Avx2 => matches!(Self::detect(), SimdLevel::Avx2 | SimdLevel::Avx512),
+            SimdLevel::Avx512 => Self::detect() == SimdLevel::Avx512,
+        }
+    }
+}
+
+/// The composite barrier and its derivatives at the robot's current pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CompositeBarrier {
+    /// `H`, capped by `γ tanh(h_min/γ)`; `γ` for an empty scan (nothing to avoid).
+    pub value: f64,
+    /// `min_i h_i`; `f64::MAX` for an empty scan.
+    pub h_min: f64,
+    /// `∂H/∂p_r` in the body frame (rotate by `R` for the world frame); `z = 0` when planar.
+    pub grad_body: Vec3,
+    /// `∂H/∂t`, the change of `H` caused by the robot's rotation.
+    pub dh_dt: f64,
+    /// Points that entered the composite (after crop and height band).
+    pub num_points: usize,
+}
+
+/// What the composite needs besides the points: envelope, `γ`, `κ`, crop and height band.
+#[derive(Debug, Clone, Copy)]
+pub struct CompositeParams {
+    /// The ellipsoid.
+    pub envelope: Envelope,
+    /// Saturation `γ > 0`.
+    pub gamma: f64,
+    /// Sharpness `κ > 0`.
+    pub kappa: f64,
+    /// Points farther than this from the robot are ignored (`None`: keep all).
+    pub crop_radius: Option<f64>,
+    /// For a planar envelope fed 3D points: keep `z_lo ≤ z ≤ z_hi` (body frame).
+    pub height_band: Option<(f64, f64)>,
+    /// Body-frame angular velocity (rad/s); planar robots use `[0, 0, yaw_rate]`.
+    pub omega: Vec3,
+}
+
+#[derive(Clone, Copy)]
+struct Coeffs<T> {
+    ia: T,
+    ib: T,
+    ic: T,
+    crop2: T,
+    z_lo: T,
+    z_hi: T,
+    inv_gamma: T,
+    kappa: T,
+}
+
+/// Raw sums of the second pass, reduced across lanes in `f64`.
+#[derive(Default, Clone, Copy)]
+struct Sums {
+    s: f64,
+    cx: f64,
+    cy: f64,
+    cz: f64,
+    cxy: f64,
+    cxz: f64,
+    cyz: f64,
+}
+
+#[inline(always)]
+fn sel<T: Copy>(c: bool, a: T, b: T) -> T {
+    if c {
+        a
+    } else {
+        b
+    }
+}
+
+/// `(in crop & band, h)` of one point.
+#[inline(always)]
+fn mask_h<T: Lane, const S: usize, const D: usize>(x: T, y: T, z: T, k: &Coeffs<T>) -> (bool, T) {
+    let zz = if D == 3 { z * z } else { T::ZERO };
+    let r2 = x * x + y * y + zz;
+    let band = if S == 3 && D == 2 { (z >= k.z_lo) & (z <= k.z_hi) } else { true };
+    let h = x * x * k.ia + y * y * k.ib + zz * k.ic - T::ONE;
+    ((r2 <= k.crop2) & band, h)
+}
+
+/// `(tanh x, sech² x)` from one exponential.
+#[inline(always)]
+fn tanh_sech2<T: Lane>(x: T) -> (T, T) {
+    let ax = x.abs();
+    let e = T::exp_nonpos(-(ax + ax));
+    let inv = T::ONE / (T::ONE + e);
+    let th = ((T::ONE - e) * inv).copysign(x);
+    let four_e = (e + e) + (e + e);
+    (th, four_e * inv * inv)
+}
+
+#[inline(always)]
+fn coords<T: Lane, const S: usize>(p: &[T]) -> (T, T, T) {
+    (p[0], p[1], if S == 3 { p[2] } else { T::ZERO })
+}
+
+/// Pass 1: `(min h over kept points, kept count, all coordinates finite)`.
+#[inline(always)]
+fn pass_min<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool) {
+    let mut hmin = [T::INF; L];
+    let mut cnt = [0u32; L];
+    let mut fin = [T::ZERO; L];
+    let blocks = pts.chunks_exact(L * S);
+    let tail = blocks.remainder();
+    for block in blocks {
+        for j in 0..L {
+            let (x, y, z) = coords::<T, S>(&block[j * S..j * S + S]);
+            fin[j] = fin[j] + x * T::ZERO + y * T::ZERO + z * T::ZERO;
+            let (m, h) = mask_h::<T, S, D>(x, y, z, k);
+            let hm = sel(m, h, T::INF);
+            hmin[j] = sel(hm < hmin[j], hm, hmin[j]);
+            cnt[j] += m as u32;
+        }
+    }
+    for p in tail.chunks_exact(S) {
+        let (x, y, z) = coords::<T, S>(p);
+        fin[0] = fin[0] + x * T::ZERO + y * T::ZERO + z * T::ZERO;
+        let (m, h) = mask_h::<T, S, D>(x, y, z, k);
+        let hm = sel(m, h, T::INF);
+        hmin[0] = sel(hm < hmin[0], hm, hmin[0]);
+        cnt[0] += m as u32;
+    }
+    let mut best = T::INF;
+    let mut finite = true;
+    for j in 0..L {
+        best = sel(hmin[j] < best, hmin[j], best);
+        finite &= fin[j] == T::ZERO;
+    }
+    (best, cnt.iter().map(|&c| c as usize).sum(), finite)
+}
+
+/// Pass 2: the weighted sums, with the log-sum-exp shifted by `shift = −κ tanh(h_min/γ)`.
+#[inline(always)]
+fn pass_sums<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>, shift: T) -> Sums {
+    let mut s = [T::ZERO; L];
+    let mut cx = [T::ZERO; L];
+    let mut cy = [T::ZERO; L];
+    let mut cz = [T::ZERO; L];
+    let mut cxy = [T::ZERO; L];
+    let mut cxz = [T::ZERO; L];
+    let mut cyz = [T::ZERO; L];
+    #[inline(always)]
+    fn point<T: Lane, const S: usize, const D: usize>(p: &[T], k: &Coeffs<T>, shift: T) -> (T, T, T, T, T) {
+        let (x, y, z) = coords::<T, S>(p);
+        let (m, h) = mask_h::<T, S, D>(x, y, z, k);
+        let (th, s2) = tanh_sech2(h * k.inv_gamma);
+        let arg = -(k.kappa * th) - shift;
+        let w = T::exp_nonpos(sel(arg < T::ZERO, arg, T::ZERO));
+        let w = sel(m, w, T::ZERO);
+        (w, w * s2, x, y, z)
+    }
+    let blocks = pts.chunks_exact(L * S);
+    let tail = blocks.remainder();
+    for block in blocks {
+        for j in 0..L {
+            let (w, c, x, y, z) = point::<T, S, D>(&block[j * S..j * S + S], k, shift);
+            s[j] = s[j] + w;
+            cx[j] = cx[j] + c * x;
+            cy[j] = cy[j] + c * y;
+            cxy[j] = cxy[j] + c * x * y;
+            if D == 3 {
+                cz[j] = cz[j] + c * z;
+                cxz[j] = cxz[j] + c * x * z;
+                cyz[j] = cyz[j] + c * y * z;
+            }
+        }
+    }
+    for p in tail.chunks_exact(S) {
+        let (w, c, x, y, z) = point::<T, S, D>(p, k, shift);
+        s[0] = s[0] + w;
+        cx[0] = cx[0] + c * x;
+        cy[0] = cy[0] + c * y;
+        cxy[0] = cxy[0] + c * x * y;
+        if D == 3 {
+            cz[0] = cz[0] + c * z;
+            cxz[0] = cxz[0] + c * x * z;
+            cyz[0] = cyz[0] + c * y * z;
+        }
+    }
+    let red = |a: &[T; L]| a.iter().map(|v| v.to_f64()).sum::<f64>();
+    Sums { s: red(&s), cx: red(&cx), cy: red(&cy), cz: red(&cz), cxy: red(&cxy), cxz: red(&cxz), cyz: red(&cyz) }
+}
+
+#[inline(always)]
+fn both_passes<T: Lane, const S: usize, const D: usize, const L: usize>(
+    pts: &[T],
+    k: &Coeffs<T>,
+) -> (T, usize, bool, Sums) {
+    let (hmin, n, finite) = pass_min::<T, S, D, L>(pts, k);
+    if !finite || n == 0 {
+        return (hmin, n, finite, Sums::default());
+    }
+    let (th_min, _) = tanh_sech2(hmin * k.inv_gamma);
+    let shift = -(k.kappa * th_min);
+    (hmin, n, finite, pass_sums::<T, S, D, L>(pts, k, shift))
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn both_passes_avx2<T: Lane, const S: usize, const D: usize, const L: usize>(
+    pts: &[T],
+    k: &Coeffs<T>,
+) -> (T, usize, bool, Sums) {
+    both_passes::<T, S, D, L>(pts, k)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx2,fma")]
+fn both_passes_avx512<T: Lane, const S: usize, const D: usize, const L: usize>(
+    pts: &[T],
+    k: &Coeffs<T>,
+) -> (T, usize, bool, Sums) {
+    both_passes::<T, S, D, L>(pts, k)
+}
+
+fn dispatch<T: Lane, const S: usize, const D: usize, const L: usize>(
+    pts: &[T],
+    k: &Coeffs<T>,
+    level: SimdLevel,
+) -> (T, usize, bool, Sums) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        // SAFETY: each arm runs only when the CPU reports the features its build enables.
+        match level {
+            SimdLevel::Avx512 if SimdLevel::Avx512.is_supported() => {
+                return unsafe { both_passes_avx512::<T, S, D, L>(pts, k) };
+            }
+            SimdLevel::Avx2 | SimdLevel::Avx512 if SimdLevel::Avx2.is_supported() => {
+                return unsafe { both_passes_avx2::<T, S, D, L>(pts, k) };
+            }
+            _ => {}
+        }
+    }
+    let _ = level;
+    both_passes::<T, S, D, L>(pts, k)
+}
+
+/// Evaluates the composite barrier over a body-frame scan stored row-major with `stride`
+/// coordinates per point (2 or 3). A planar envelope uses `x, y` (and `z` only for the
+/// height band); a 3D envelope needs `stride == 3`.
+///
+/// ```
+/// use shieldnav_core::shield::{evaluate_composite, CompositeParams, Envelope, SimdLevel};
+/// let params = CompositeParams {
+///     envelope: Envelope::new(&[0.9, 0.45]).unwrap(), gamma: 0.9, kappa: 8.0,
+///     crop_radius: Some(3.5), height_band: None, omega: [0.0; 3],
+/// };
+/// // one wall point 1 m to the left: h = 1/0.45² − 1 ≈ 3.94
+/// let b = evaluate_composite(&[0.0f64, 1.0], 2, &params, SimdLevel::detect()).unwrap();
+/// assert!((b.h_min - (1.0 / 0.2025 - 1.0)).abs() < 1e-12);
+/// assert!(b.grad_body[1] < 0.0); // moving left lowers H
+/// ```
+pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams, level: SimdLevel) -> Result<CompositeBarrier> {
+    let dim = p.envelope.dim();
+    if stride != 2 && stride != 3 {
+        return Err(Error::invalid("points", format!("points need 2 or 3 coordinates, got {stride}")));
+    }
+    if pts.len() % stride != 0 {
+        return Err(Error::invalid("points", format!("{} values do not make rows of {stride}", pts.len())));
+    }
+    if dim > stride {
+        return Err(Error::DimensionMismatch { name: "points", expected: dim, got: stride });
+    }
+    let a = p.envelope.inv_sq();
+    let (z_lo, z_hi) = p.height_band.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+    let crop = p.crop_radius.unwrap_or(f64::INFINITY);
+    let k = Coeffs {
+        ia: T::from_f64(a[0]),
+        ib: T::from_f64(a[1]),
+        ic: T::from_f64(a[2]),
+        crop2: T::from_f64(crop * crop),
+        z_lo: T::from_f64(z_lo),
+        z_hi: T::from_f64(z_hi),
+        inv_gamma: T::from_f64(1.0 / p.gamma),
+        kappa: T::from_f64(p.kappa),
+    };
+    let (hmin, n, finite, sums) = match (stride, dim) {
+        (2, _) => dispatch::<T, 2, 2, 16>(pts, &k, level),
+        (3, 2) => dispatch::<T, 3, 2, 16>(pts, &k, level),
+        _ => dispatch::<T, 3, 3, 16>(pts, &k, level),
+    };
+    if !finite {
+        return Err(Error::invalid("points", "contains NaN or inf"));
+    }
+    if n == 0 {
+        return Ok(CompositeBarrier { value: p.gamma, h_min: f64::MAX, grad_body: [0.0; 3], dh_dt: 0.0, num_points: 0 });
+    }
+    let (th_min, _) = tanh_sech2(hmin * k.inv_gamma);
+    let shift = -(k.kappa * th_min).to_f64();
+    let h_min = hmin.to_f64();
+    let soft = -(p.gamma / p.kappa) * (shift + sums.s.ln());
+    let value = soft.min(p.gamma * (h_min / p.gamma).tanh());
+    let inv_s = 1.0 / sums.s;
+    let grad_body = [-2.0 * a[0] * sums.cx * inv_s, -2.0 * a[1] * sums.cy * inv_s, -2.0 * a[2] * sums.cz * inv_s];
+    let w = p.omega;
+    let dh_dt = 2.0 * inv_s * (w[0] * (a[1] - a[2]) * sums.cyz + w[1] * (a[2] - a[0]) * sums.cxz + w[2] * (a[0] - a[1]) * sums.cxy);
+    Ok(CompositeBarrier { value, h_min, grad_body, dh_dt, num_points: n })
+}

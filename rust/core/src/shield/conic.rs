@@ -1,0 +1,216 @@
+//! The general filter QP with many rows, solved with Clarabel:
+//!
+//! `min ‖u − u_nom‖²  s.t.  a_kᵀu ≥ c_k (k = 1..M),  −u_max ≤ u ≤ u_max`.
+//!
+//! Used by the distance baseline (one row per LIDAR point) and whenever a user adds extra
+//! linear constraints. If the rows cannot all be met, the fallback is the command that
+//! violates least: first `t* = min t s.t. a_kᵀu + t ≥ c_k, t ≥ 0` (an LP), then the command
+//! closest to `u_nom` with that violation; the outcome says `feasible = false`.
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettings, DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+
+use super::qp::QpSolution;
+use crate::error::{Error, Result};
+
+/// Linear rows `a_kᵀu ≥ c_k` over a `dim`-dimensional command, row-major.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LinearConstraints {
+    dim: usize,
+    rows: Vec<f64>,
+    rhs: Vec<f64>,
+}
+
+impl LinearConstraints {
+    /// Empty rows for a `dim`-dimensional command.
+    pub fn new(dim: usize) -> Self {
+        Self { dim, rows: Vec::new(), rhs: Vec::new() }
+    }
+
+    /// Rows from a row-major `(M, dim)` matrix `a` and `(M,)` right-hand side `c`.
+    pub fn from_rows(dim: usize, a: &[f64], c: &[f64]) -> Result<Self> {
+        if dim == 0 || a.len() != c.len() * dim {
+            return Err(Error::invalid("extra_A", format!("expected shape ({}, {dim}) to match extra_b, got {} values", c.len(), a.len())));
+        }
+        if a.iter().any(|v| !v.is_finite()) {
+            return Err(Error::invalid("extra_A", "contains NaN or inf"));
+        }
+        if c.iter().any(|v| !v.is_finite()) {
+            return Err(Error::invalid("extra_b", "contains NaN or inf"));
+        }
+        Ok(Self { dim, rows: a.to_vec(), rhs: c.to_vec() })
+    }
+
+    /// Appends `aᵀu ≥ c`.
+    pub fn push(&mut self, a: &[f64], c: f64) {
+        debug_assert_eq!(a.len(), self.dim);
+        self.rows.extend_from_slice(a);
+        self.rhs.push(c);
+    }
+
+    /// Appends every row of `other`.
+    pub fn extend(&mut self, other: &LinearConstraints) {
+        debug_assert_eq!(other.dim, self.dim);
+        self.rows.extend_from_slice(&other.rows);
+        self.rhs.extend_from_slice(&other.rhs);
+    }
+
+    /// Removes all rows, keeping the allocation.
+    pub fn clear(&mut self) {
+        self.rows.clear();
+        self.rhs.clear();
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.rhs.len()
+    }
+
+    /// No rows.
+    pub fn is_empty(&self) -> bool {
+        self.rhs.is_empty()
+    }
+
+    /// Command dimension.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Row `k` as `(a_k, c_k)`.
+    pub fn row(&self, k: usize) -> (&[f64], f64) {
+        (&self.rows[k * self.dim..(k + 1) * self.dim], self.rhs[k])
+    }
+
+    /// Largest violation `max_k (c_k − a_kᵀu)⁺` of a command.
+    pub fn max_violation(&self, u: &[f64]) -> f64 {
+        (0..self.len())
+            .map(|k| {
+                let (a, c) = self.row(k);
+                c - a.iter().zip(u).map(|(x, y)| x * y).sum::<f64>()
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+fn settings() -> DefaultSettings<f64> {
+    DefaultSettingsBuilder::default()
+        .verbose(false)
+        .max_iter(100)
+        .tol_feas(1e-9)
+        .tol_gap_abs(1e-9)
+        .tol_gap_rel(1e-9)
+        .build()
+        .expect("static Clarabel settings are valid")
+}
+
+/// `A` in CSC for `n` variables: the `M` rows negated (`−a_kᵀx + s = −c_k`), then the box
+/// `±x_j ≤ u_max_j` on the first `d` variables, then `extra_cols` identity-like columns given
+/// as `(row, col, value)` triples.
+fn build(rows: &LinearConstraints, n: usize, u_max: Option<&[f64]>, extra: &[(usize, usize, f64)]) -> CscMatrix<f64> {
+    let d = rows.dim();
+    let m = rows.len();
+    let n_box = if u_max.is_some() { 2 * d } else { 0 };
+    let mut colptr = Vec::with_capacity(n + 1);
+    let mut rowval = Vec::new();
+    let mut nzval = Vec::new();
+    colptr.push(0);
+    for j in 0..n {
+        if j < d {
+            for k in 0..m {
+                let v = rows.row(k).0[j];
+                if v != 0.0 {
+                    rowval.push(k);
+                    nzval.push(-v);
+                }
+            }
+            if u_max.is_some() {
+                rowval.push(m + j);
+                nzval.push(1.0);
+                rowval.push(m + d + j);
+                nzval.push(-1.0);
+            }
+        }
+        for &(r, c, v) in extra {
+            if c == j {
+                rowval.push(r);
+                nzval.push(v);
+            }
+        }
+        colptr.push(rowval.len());
+    }
+    let n_rows = m + n_box + extra.iter().map(|&(r, _, _)| r + 1).max().unwrap_or(0).saturating_sub(m + n_box);
+    CscMatrix::new(n_rows, n, colptr, rowval, nzval)
+}
+
+fn rhs(rows: &LinearConstraints, u_max: Option<&[f64]>) -> Vec<f64> {
+    let mut b: Vec<f64> = rows.rhs.iter().map(|c| -c).collect();
+    if let Some(mx) = u_max {
+        b.extend_from_slice(mx);
+        b.extend_from_slice(mx);
+    }
+    b
+}
+
+fn run(p: &CscMatrix<f64>, q: &[f64], a: &CscMatrix<f64>, b: &[f64]) -> Result<(SolverStatus, Vec<f64>)> {
+    let cones = [SupportedConeT::NonnegativeConeT(b.len())];
+    let mut solver = DefaultSolver::new(p, q, a, b, &cones, settings()).map_err(|e| Error::Solver(format!("{e:?}")))?;
+    solver.solve();
+    Ok((solver.solution.status, solver.solution.x.clone()))
+}
+
+fn solved(s: SolverStatus) -> bool {
+    matches!(s, SolverStatus::Solved | SolverStatus::AlmostSolved)
+}
+
+/// Solves the many-row filter QP with Clarabel (see the module docs for the fallback).
+pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>) -> Result<QpSolution> {
+    let d = u_nom.len();
+    if rows.dim() != d {
+        return Err(Error::DimensionMismatch { name: "extra_A", expected: d, got: rows.dim() });
+    }
+    let mut clamped = [0.0; 3];
+    for j in 0..d {
+        clamped[j] = u_max.map_or(u_nom[j], |m| u_nom[j].clamp(-m[j], m[j]));
+    }
+    if rows.max_violation(&clamped[..d]) <= 0.0 {
+        return Ok(QpSolution { u: clamped, active: false, feasible: true });
+    }
+    let p = CscMatrix::identity(d);
+    let q: Vec<f64> = u_nom.iter().map(|v| -v).collect();
+    let a = build(rows, d, u_max, &[]);
+    let b = rhs(rows, u_max);
+    let (status, x) = run(&p, &q, &a, &b)?;
+    let mut u = [0.0; 3];
+    if solved(status) {
+        u[..d].copy_from_slice(&x[..d]);
+        return Ok(QpSolution { u, active: true, feasible: true });
+    }
+    if !matches!(status, SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible) {
+        return Err(Error::Solver(format!("Clarabel stopped with {status:?}")));
+    }
+    // Stage 1: the least possible violation t*, an LP in (u, t).
+    let m = rows.len();
+    let n_box = if u_max.is_some() { 2 * d } else { 0 };
+    let mut t_col: Vec<(usize, usize, f64)> = (0..m).map(|k| (k, d, -1.0)).collect();
+    t_col.push((m + n_box, d, -1.0)); // −t + s = 0, s ≥ 0  ⇔  t ≥ 0
+    let a_t = build(rows, d + 1, u_max, &t_col);
+    let mut b_t = b.clone();
+    b_t.push(0.0);
+    let mut q_t = vec![0.0; d + 1];
+    q_t[d] = 1.0;
+    let (status, x) = run(&CscMatrix::zeros((d + 1, d + 1)), &q_t, &a_t, &b_t)?;
+    if !solved(status) {
+        return Err(Error::Solver(format!("Clarabel could not find the least violation: {status:?}")));
+    }
+    let t_star = x[d].max(0.0);
+    // Stage 2: the command closest to u_nom with violation at most t*.
+    let mut relaxed = LinearConstraints::new(d);
+    for k in 0..m {
+        let (row, c) = rows.row(k);
+        relaxed.push(row, c - t_star - 1e-9 * (1.0 + t_star));
+    }
+    let (status, x2) = run(&p, &q, &build(&relaxed, d, u_max, &[]), &rhs(&relaxed, u_max))?;
+    let src = if solved(status) { &x2 } else { &x };
+    u[..d].copy_from_slice(&src[..d]);
+    Ok(QpSolution { u, active: true, feasible: false })
+}

@@ -1,0 +1,562 @@
+//! The composite-CBF safety shield of the paper (Sec. III) and its baselines.
+//!
+//! A [`Shield`] turns a nominal world-frame velocity `u_nom` and a body-frame LIDAR scan into
+//! the filtered command `u*` of Eq. (qp):
+//!
+//! `u* = argmin ‖u − u_nom‖²  s.t.  ∂H/∂pᵀ u ≥ −α(H) − ∂H/∂t,  |u_j| ≤ u_max_j`.
+//!
+//! Methods ([`ShieldMethod`]): the paper's soft-min composite of one ellipsoidal CBF per
+//! point (closed-form exact QP), the distance baseline (one spherical row per point, all rows
+//! in one Clarabel QP), hard-min (the nearest point's ellipsoidal CBF only), and no filter.
+//!
+//! ```
+//! use shieldnav_core::shield::{BodyState, Scan, Shield, ShieldConfig};
+//! let mut shield = Shield::new(ShieldConfig::default()).unwrap();
+//! // a wall 0.6 m to the left of the robot, the robot asked to move left at 1 m/s
+//! let wall: Vec<f64> = (-20..=20).flat_map(|k| [k as f64 * 0.05, 0.6]).collect();
+//! let out = shield.filter(&Scan::new_f64(&wall, 2).unwrap(), &BodyState::planar(0.0, 0.0).unwrap(), &[0.0, 1.0]).unwrap();
+//! assert!(out.active && out.feasible);
+//! assert!(out.u[1] < 1.0); // slowed down toward the wall
+//! ```
+
+mod composite;
+mod conic;
+mod ellipsoid;
+mod lane;
+mod qp;
+mod scan;
+
+use std::time::Instant;
+
+pub use composite::{evaluate_composite, CompositeBarrier, CompositeParams, SimdLevel};
+pub use conic::{solve_rows, LinearConstraints};
+pub use ellipsoid::Envelope;
+pub use lane::Lane;
+pub use qp::{project_halfspace_box, QpSolution};
+pub use scan::{select_points, ScanFilter, ScanScratch};
+
+use crate::error::{Error, Result};
+use crate::math::{det, mat_vec, orthonormality_error, rot_z, Mat3, Vec3};
+
+/// Which filter a [`Shield`] applies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShieldMethod {
+    /// The paper's soft-min composite of per-point ellipsoidal CBFs (`"composite"`).
+    Composite,
+    /// One spherical distance row `‖p_i − p_r‖ ≥ s_d` per point, one Clarabel QP (`"distance"`).
+    Distance,
+    /// The ellipsoidal CBF of the nearest point (smallest `h_i`) only (`"hardmin"`).
+    HardMin,
+    /// No filter: `u* = u_nom`; the composite is still evaluated and reported (`"none"`).
+    Unfiltered,
+}
+
+impl ShieldMethod {
+    /// Parses `"composite"`, `"distance"`, `"hardmin"` or `"none"`.
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "composite" => Ok(Self::Composite),
+            "distance" => Ok(Self::Distance),
+            "hardmin" => Ok(Self::HardMin),
+            "none" => Ok(Self::Unfiltered),
+            other => Err(Error::invalid(
+                "method",
+                format!("unknown method {other:?}; expected \"composite\", \"distance\", \"hardmin\" or \"none\""),
+            )),
+        }
+    }
+
+    /// The name [`ShieldMethod::parse`] reads.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Composite => "composite",
+            Self::Distance => "distance",
+            Self::HardMin => "hardmin",
+            Self::Unfiltered => "none",
+        }
+    }
+}
+
+/// Every parameter of the shield. `Default` holds the paper's values (Sec. IV-B): a
+/// 0.9 × 0.45 m ellipse, `γ = 0.9`, `κ = 8`, `α(h) = 2h`, points cropped at 3.5 m, and
+/// `s_d = 0.8 m` for the distance baseline.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShieldConfig {
+    /// Semi-axes of the body-frame ellipsoid (m): 2 values planar, 3 values 3D.
+    pub semi_axes: Vec<f64>,
+    /// Saturation `γ > 0` of `tanh(h/γ)`.
+    pub gamma: f64,
+    /// Sharpness `κ > 0` of the soft-min.
+    pub kappa: f64,
+    /// Gain of the linear class-K function `α(h) = α h`, `α > 0`.
+    pub alpha: f64,
+    /// Symmetric world-frame velocity box `|u_j| ≤ u_max_j` (m/s), one entry per axis.
+    pub u_max: Option<Vec<f64>>,
+    /// Which filter.
+    pub method: ShieldMethod,
+    /// Safety distance `s_d` (m) of the distance baseline.
+    pub safety_distance: f64,
+    /// Crop, height band and down-sampling of the scan.
+    pub scan: ScanFilter,
+    /// Below this gradient norm the barrier counts as flat: an unmet row is infeasible.
+    pub grad_eps: f64,
+}
+
+impl Default for ShieldConfig {
+    fn default() -> Self {
+        Self {
+            semi_axes: vec![0.9, 0.45],
+            gamma: 0.9,
+            kappa: 8.0,
+            alpha: 2.0,
+            u_max: None,
+            method: ShieldMethod::Composite,
+            safety_distance: 0.8,
+            scan: ScanFilter::default(),
+            grad_eps: 1e-9,
+        }
+    }
+}
+
+fn positive(name: &'static str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, format!("must be finite and > 0, got {v}")))
+    }
+}
+
+fn finite(name: &'static str, v: &[f64]) -> Result<()> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, "contains NaN or inf"))
+    }
+}
+
+/// The robot's orientation and angular velocity when the scan was taken.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyState {
+    rotation: Mat3,
+    omega: Vec3,
+    planar: bool,
+}
+
+impl BodyState {
+    /// A planar robot at heading `yaw` (rad) turning at `yaw_rate` (rad/s).
+    pub fn planar(yaw: f64, yaw_rate: f64) -> Result<Self> {
+        finite("yaw", &[yaw])?;
+        finite("omega", &[yaw_rate])?;
+        Ok(Self { rotation: rot_z(yaw), omega: [0.0, 0.0, yaw_rate], planar: true })
+    }
+
+    /// A robot with body-to-world rotation `rotation` and body-frame angular velocity `omega`.
+    pub fn spatial(rotation: Mat3, omega: Vec3) -> Result<Self> {
+        finite("rotation", rotation.as_flattened())?;
+        finite("omega", &omega)?;
+        let err = orthonormality_error(&rotation);
+        if err > 1e-6 || det(&rotation) < 0.0 {
+            return Err(Error::invalid("rotation", format!("not a proper rotation matrix (|RᵀR − I| = {err:.2e}, det = {:.3})", det(&rotation))));
+        }
+        Ok(Self { rotation, omega, planar: false })
+    }
+
+    /// Body-to-world rotation.
+    pub fn rotation(&self) -> &Mat3 {
+        &self.rotation
+    }
+
+    /// Body-frame angular velocity (rad/s).
+    pub fn omega(&self) -> &Vec3 {
+        &self.omega
+    }
+}
+
+/// A borrowed body-frame scan: `N` points stored row-major, 2 or 3 coordinates each.
+#[derive(Debug, Clone, Copy)]
+pub enum Points<'a> {
+    /// Single precision: runs the `f32` kernel.
+    F32(&'a [f32]),
+    /// Double precision: runs the `f64` kernel.
+    F64(&'a [f64]),
+}
+
+/// A scan: points and their row stride.
+#[derive(Debug, Clone, Copy)]
+pub struct Scan<'a> {
+    points: Points<'a>,
+    stride: usize,
+}
+
+impl<'a> Scan<'a> {
+    fn new(points: Points<'a>, stride: usize) -> Result<Self> {
+        let len = match points {
+            Points::F32(p) => p.len(),
+            Points::F64(p) => p.len(),
+        };
+        if stride != 2 && stride != 3 {
+            return Err(Error::invalid("points", format!("expected 2 or 3 columns, got {stride}")));
+        }
+        if len % stride != 0 {
+            return Err(Error::invalid("points", format!("{len} values do not make rows of {stride}")));
+        }
+        Ok(Self { points, stride })
+    }
+
+    /// A scan of `f32` points with `stride` (2 or 3) coordinates each.
+    pub fn new_f32(points: &'a [f32], stride: usize) -> Result<Self> {
+        Self::new(Points::F32(points), stride)
+    }
+
+    /// A scan of `f64` points with `stride` (2 or 3) coordinates each.
+    pub fn new_f64(points: &'a [f64], stride: usize) -> Result<Self> {
+        Self::new(Points::F64(points), stride)
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        match self.points {
+            Points::F32(p) => p.len() / self.stride,
+            Points::F64(p) => p.len() / self.stride,
+        }
+    }
+
+    /// No points.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Coordinates per point.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+}
+
+/// Everything one filter call produced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShieldOutcome {
+    /// Filtered world-frame command `u*` (first `dim` entries).
+    pub u: Vec3,
+    /// 2 (planar) or 3.
+    pub dim: usize,
+    /// The barrier the row was built from: the composite `H` (composite and none), the
+    /// nearest point's `h` (hardmin), `min_i (‖p_i − p_r‖² − s_d²)` (distance).
+    pub value: f64,
+    /// `min_i h_i` of the method's per-point CBFs (`f64::MAX` when no point is used).
+    pub h_min: f64,
+    /// World-frame `∂H/∂p_r` (for distance: the nearest point's row).
+    pub grad_p: Vec3,
+    /// `∂H/∂t` (0 for distance: a sphere does not turn).
+    pub dh_dt: f64,
+    /// Points used after crop, band and down-sampling.
+    pub num_points: usize,
+    /// The constraints changed the command (beyond the box clamp of `u_nom`).
+    pub active: bool,
+    /// The constraints could be met; if not, `u` is the documented fallback.
+    pub feasible: bool,
+    /// Wall time of the whole call, points in to `u*` out (ns).
+    pub solve_time_ns: u64,
+}
+
+/// The safety shield: configuration, scratch buffers and the SIMD level of its kernel.
+#[derive(Debug, Clone)]
+pub struct Shield {
+    config: ShieldConfig,
+    envelope: Envelope,
+    level: SimdLevel,
+    scratch: ScanScratch,
+    buf32: Vec<f32>,
+    buf64: Vec<f64>,
+    body: Vec<f64>,
+    rows: LinearConstraints,
+}
+
+impl Shield {
+    /// Validates `config`; every error names the field at fault.
+    pub fn new(config: ShieldConfig) -> Result<Self> {
+        let envelope = Envelope::new(&config.semi_axes)?;
+        positive("gamma", config.gamma)?;
+        positive("kappa", config.kappa)?;
+        positive("alpha", config.alpha)?;
+        positive("safety_distance", config.safety_distance)?;
+        if !(config.grad_eps.is_finite() && config.grad_eps >= 0.0) {
+            return Err(Error::invalid("grad_eps", format!("must be finite and ≥ 0, got {}", config.grad_eps)));
+        }
+        if let Some(m) = &config.u_max {
+            if m.len() != envelope.dim() {
+                return Err(Error::DimensionMismatch { name: "u_max", expected: envelope.dim(), got: m.len() });
+            }
+            for &v in m {
+                positive("u_max", v)?;
+            }
+        }
+        config.scan.validate()?;
+        let dim = envelope.dim();
+        Ok(Self {
+            config,
+            envelope,
+            level: SimdLevel::detect(),
+            scratch: ScanScratch::default(),
+            buf32: Vec::new(),
+            buf64: Vec::new(),
+            body: Vec::new(),
+            rows: LinearConstraints::new(dim),
+        })
+    }
+
+    /// Runs the composite kernel at `level` instead of the best one detected (benchmarks).
+    pub fn with_simd_level(mut self, level: SimdLevel) -> Result<Self> {
+        if !level.is_supported() {
+            return Err(Error::invalid("simd_level", format!("{level:?} is not supported by this CPU")));
+        }
+        self.level = level;
+        Ok(self)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ShieldConfig {
+        &self.config
+    }
+
+    /// The ellipsoid.
+    pub fn envelope(&self) -> &Envelope {
+        &self.envelope
+    }
+
+    /// The SIMD level the composite kernel runs at.
+    pub fn simd_level(&self) -> SimdLevel {
+        self.level
+    }
+
+    /// 2 for a planar shield, 3 for 3D.
+    pub fn dim(&self) -> usize {
+        self.envelope.dim()
+    }
+
+    /// Filters `u_nom` (world frame) against a body-frame `scan`.
+    pub fn filter(&mut self, scan: &Scan, state: &BodyState, u_nom: &[f64]) -> Result<ShieldOutcome> {
+        self.filter_with(scan, state, u_nom, None)
+    }
+
+    /// [`Shield::filter`] with extra user rows `a_kᵀu ≥ c_k`, solved together with the CBF row
+    /// by Clarabel.
+    pub fn filter_with(&mut self, scan: &Scan, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<ShieldOutcome> {
+        let start = Instant::now();
+        let dim = self.dim();
+        self.check_inputs(scan, state, u_nom, extra)?;
+        let r = state.rotation;
+        let to_world = |g: &Vec3| -> Vec3 {
+            let mut w = mat_vec(&r, g);
+            if dim == 2 {
+                w[2] = 0.0;
+            }
+            w
+        };
+        let alpha = self.config.alpha;
+        let u_max = self.config.u_max.clone();
+        let (value, h_min, grad_p, dh_dt, num_points, sol) = match self.config.method {
+            ShieldMethod::Composite | ShieldMethod::Unfiltered => {
+                let b = self.barrier(scan, state)?;
+                let g = to_world(&b.grad_body);
+                let sol = if self.config.method == ShieldMethod::Unfiltered {
+                    let mut u = [0.0; 3];
+                    u[..dim].copy_from_slice(u_nom);
+                    QpSolution { u, active: false, feasible: true }
+                } else {
+                    self.solve_row(u_nom, &g, -alpha * b.value - b.dh_dt, u_max.as_deref(), extra)?
+                };
+                (b.value, b.h_min, g, b.dh_dt, b.num_points, sol)
+            }
+            ShieldMethod::HardMin => {
+                let env = self.envelope;
+                let pts = self.selected_f64(scan);
+                let n = pts.len() / dim;
+                let nearest = (0..n)
+                    .map(|i| {
+                        let p = &pts[i * dim..(i + 1) * dim];
+                        [p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]
+                    })
+                    .map(|p| (env.h_body(&p), p))
+                    .min_by(|a, b| a.0.total_cmp(&b.0));
+                match nearest {
+                    None => {
+                        let sol = self.solve_row(u_nom, &[0.0; 3], f64::NEG_INFINITY, u_max.as_deref(), extra)?;
+                        (f64::MAX, f64::MAX, [0.0; 3], 0.0, 0, sol)
+                    }
+                    Some((h, p)) => {
+                        let g = to_world(&env.grad_body(&p));
+                        let dt = env.dh_dt_body(&p, &state.omega);
+                        let sol = self.solve_row(u_nom, &g, -alpha * h - dt, u_max.as_deref(), extra)?;
+                        (h, h, g, dt, n, sol)
+                    }
+                }
+            }
+            ShieldMethod::Distance => {
+                let pts = self.selected_f64(scan).to_vec();
+                let n = pts.len() / dim;
+                let sd2 = self.config.safety_distance * self.config.safety_distance;
+                self.rows.clear();
+                let (mut h_min, mut g_near) = (f64::MAX, [0.0; 3]);
+                for i in 0..n {
+                    let p = &pts[i * dim..(i + 1) * dim];
+                    let d = to_world(&[p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]);
+                    let h = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - sd2;
+                    let g = [-2.0 * d[0], -2.0 * d[1], -2.0 * d[2]];
+                    self.rows.push(&g[..dim], -alpha * h);
+                    if h < h_min {
+                        (h_min, g_near) = (h, g);
+                    }
+                }
+                if let Some(e) = extra {
+                    self.rows.extend(e);
+                }
+                let sol = solve_rows(u_nom, &self.rows, u_max.as_deref())?;
+                (h_min, h_min, g_near, 0.0, n, sol)
+            }
+        };
+        Ok(ShieldOutcome {
+            u: sol.u,
+            dim,
+            value,
+            h_min,
+            grad_p,
+            dh_dt,
+            num_points,
+            active: sol.active,
+            feasible: sol.feasible,
+            solve_time_ns: start.elapsed().as_nanos() as u64,
+        })
+    }
+
+    /// [`Shield::filter_with`] for a scan in the world frame: points `p_i^W`, the robot at
+    /// `position` (its first `stride` entries). The points are taken to the body frame,
+    /// `Rᵀ(p_i − p_r)`, so only relative positions matter (an odometry jump that moves robot
+    /// and points together changes nothing).
+    pub fn filter_world(
+        &mut self,
+        scan: &Scan,
+        position: &Vec3,
+        state: &BodyState,
+        u_nom: &[f64],
+        extra: Option<&LinearConstraints>,
+    ) -> Result<ShieldOutcome> {
+        finite("position", position)?;
+        let stride = scan.stride;
+        let mut body = std::mem::take(&mut self.body);
+        body.clear();
+        body.reserve(scan.len() * stride);
+        let rt = state.rotation;
+        let mut push = |p: [f64; 3]| {
+            let d = [p[0] - position[0], p[1] - position[1], if stride == 3 { p[2] - position[2] } else { 0.0 }];
+            let b = crate::math::mat_t_vec(&rt, &d);
+            body.extend_from_slice(&b[..stride]);
+        };
+        match scan.points {
+            Points::F32(p) => p.chunks_exact(stride).for_each(|c| push([c[0] as f64, c[1] as f64, if stride == 3 { c[2] as f64 } else { 0.0 }])),
+            Points::F64(p) => p.chunks_exact(stride).for_each(|c| push([c[0], c[1], if stride == 3 { c[2] } else { 0.0 }])),
+        }
+        let out = Scan::new_f64(&body, stride).and_then(|s| self.filter_with(&s, state, u_nom, extra));
+        self.body = body;
+        out
+    }
+
+    /// The composite barrier of `scan` (after crop, band and down-sampling), without filtering.
+    pub fn barrier(&mut self, scan: &Scan, state: &BodyState) -> Result<CompositeBarrier> {
+        let mut params = CompositeParams {
+            envelope: self.envelope,
+            gamma: self.config.gamma,
+            kappa: self.config.kappa,
+            crop_radius: self.config.scan.crop_radius,
+            height_band: self.config.scan.height_band,
+            omega: state.omega,
+        };
+        if !self.config.scan.downsamples() {
+            return match scan.points {
+                Points::F32(p) => evaluate_composite(p, scan.stride, &params, self.level),
+                Points::F64(p) => evaluate_composite(p, scan.stride, &params, self.level),
+            };
+        }
+        check_finite(scan)?;
+        params.crop_radius = None;
+        params.height_band = None;
+        let dim = self.dim();
+        match scan.points {
+            Points::F32(p) => {
+                select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf32);
+                evaluate_composite(&self.buf32, dim, &params, self.level)
+            }
+            Points::F64(p) => {
+                select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf64);
+                evaluate_composite(&self.buf64, dim, &params, self.level)
+            }
+        }
+    }
+
+    /// The points a baseline uses, as `f64` rows of `dim` (checked finite by the caller).
+    fn selected_f64(&mut self, scan: &Scan) -> &[f64] {
+        match scan.points {
+            Points::F32(p) => {
+                select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf32);
+                self.buf64.clear();
+                self.buf64.extend(self.buf32.iter().map(|&v| v as f64));
+            }
+            Points::F64(p) => {
+                select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf64);
+            }
+        }
+        &self.buf64
+    }
+
+    fn solve_row(&mut self, u_nom: &[f64], g: &Vec3, b: f64, u_max: Option<&[f64]>, extra: Option<&LinearConstraints>) -> Result<QpSolution> {
+        let dim = self.dim();
+        match extra {
+            None => Ok(project_halfspace_box(u_nom, &g[..dim], b, u_max, self.config.grad_eps)),
+            Some(e) => {
+                self.rows.clear();
+                if b.is_finite() {
+                    self.rows.push(&g[..dim], b);
+                }
+                self.rows.extend(e);
+                solve_rows(u_nom, &self.rows, u_max)
+            }
+        }
+    }
+
+    fn check_inputs(&self, scan: &Scan, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<()> {
+        let dim = self.dim();
+        if u_nom.len() != dim {
+            return Err(Error::DimensionMismatch { name: "u_nom", expected: dim, got: u_nom.len() });
+        }
+        finite("u_nom", u_nom)?;
+        if scan.stride < dim {
+            return Err(Error::DimensionMismatch { name: "points", expected: dim, got: scan.stride });
+        }
+        if dim == 2 && !state.planar {
+            return Err(Error::invalid("rotation", "a planar shield takes yaw and a scalar omega, not a 3D rotation"));
+        }
+        if let Some(e) = extra {
+            if e.dim() != dim {
+                return Err(Error::DimensionMismatch { name: "extra_A", expected: dim, got: e.dim() });
+            }
+            if self.config.method == ShieldMethod::Unfiltered {
+                return Err(Error::invalid("extra_A", "method \"none\" applies no constraints; pick a filtering method"));
+            }
+        }
+        if self.config.method != ShieldMethod::Composite && self.config.method != ShieldMethod::Unfiltered {
+            check_finite(scan)?;
+        }
+        Ok(())
+    }
+}
+
+fn check_finite(scan: &Scan) -> Result<()> {
+    let ok = match scan.points {
+        Points::F32(p) => p.iter().all(|v| v.is_finite()),
+        Points::F64(p) => p.iter().all(|v| v.is_finite()),
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::invalid("points", "contains NaN or inf"))
+    }
+}

@@ -1,0 +1,154 @@
+//! The paper's filter, Eq. (qp), solved exactly in closed form:
+//!
+//! `u* = argmin ‖u − u_nom‖²  s.t.  gᵀu ≥ b,  −u_max ≤ u ≤ u_max`
+//!
+//! with `g = ∂H/∂p`, `b = −α(H) − ∂H/∂t`. This is the Euclidean projection of `u_nom` onto
+//! the intersection of a half-space and a box. Its KKT conditions give
+//! `u(μ) = clamp(u_nom + μ g)` for a multiplier `μ ≥ 0`, and `φ(μ) = gᵀu(μ)` is
+//! non-decreasing and piecewise linear in `μ` with at most `2d` kinks, so the optimum is
+//! found by walking the kinks in order and interpolating on the segment where `φ` reaches
+//! `b`. (Projecting on the half-space and then clamping is *not* this optimum, and can leave
+//! the constraint violated.)
+//!
+//! Infeasibility and its fallback:
+//! - if `‖g‖ ≤ grad_eps` and `b > 0` (e.g. `H < 0` with a vanishing gradient: no direction
+//!   raises `H`), the command is `u = 0`: stop;
+//! - if the box cannot reach `gᵀu ≥ b` (`Σ |g_j| u_max_j < b`), the command is the one that
+//!   violates least, `argmax_{box} gᵀu` = `u_max · sign(g)` (components with `g_j = 0`
+//!   stay at `clamp(u_nom_j)`).
+//!
+//! Both report `feasible = false`; `u_nom` is never returned silently.
+
+/// The solution of one filter QP.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QpSolution {
+    /// The filtered command (the first `d` entries are used).
+    pub u: [f64; 3],
+    /// The constraint row changed the command (multiplier `μ > 0`).
+    pub active: bool,
+    /// The constraint could be met inside the box.
+    pub feasible: bool,
+}
+
+/// `gᵀu` on the first `d` entries.
+#[inline]
+fn dot_d(g: &[f64], u: &[f64]) -> f64 {
+    g.iter().zip(u).map(|(a, b)| a * b).sum()
+}
+
+/// Solves `min ‖u − u_nom‖² s.t. gᵀu ≥ b` and, with `u_max`, `|u_j| ≤ u_max_j`, exactly.
+/// `u_nom`, `g` and `u_max` have the same length `d ∈ {1, 2, 3}`.
+///
+/// ```
+/// use shieldnav_core::shield::project_halfspace_box;
+/// // keep u_y ≥ 0.5 while asking for (1, 0), inside |u| ≤ 1
+/// let s = project_halfspace_box(&[1.0, 0.0], &[0.0, 1.0], 0.5, Some(&[1.0, 1.0]), 1e-9);
+/// assert_eq!(&s.u[..2], &[1.0, 0.5]);
+/// assert!(s.active && s.feasible);
+/// ```
+pub fn project_halfspace_box(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[f64]>, grad_eps: f64) -> QpSolution {
+    let d = u_nom.len();
+    debug_assert!(d <= 3 && g.len() == d && u_max.is_none_or(|m| m.len() == d));
+    let mut u = [0.0; 3];
+    let clamp = |j: usize, v: f64| match u_max {
+        Some(m) => v.clamp(-m[j], m[j]),
+        None => v,
+    };
+    for j in 0..d {
+        u[j] = clamp(j, u_nom[j]);
+    }
+    if dot_d(g, &u[..d]) >= b {
+        return QpSolution { u, active: false, feasible: true };
+    }
+    let g2 = dot_d(g, g);
+    if g2.sqrt() <= grad_eps {
+        return QpSolution { u: [0.0; 3], active: true, feasible: false };
+    }
+    let Some(m) = u_max else {
+        let mu = (b - dot_d(g, u_nom)) / g2;
+        for j in 0..d {
+            u[j] = u_nom[j] + mu * g[j];
+        }
+        return QpSolution { u, active: true, feasible: true };
+    };
+    let reach: f64 = (0..d).map(|j| g[j].abs() * m[j]).sum();
+    if reach < b {
+        for j in 0..d {
+            if g[j] != 0.0 {
+                u[j] = m[j].copysign(g[j]);
+            }
+        }
+        return QpSolution { u, active: true, feasible: false };
+    }
+    // Kinks of φ(μ) = Σ g_j clamp(u_nom_j + μ g_j): where a component enters or leaves the box.
+    let mut kinks = [0.0f64; 6];
+    let mut nk = 0;
+    for j in 0..d {
+        if g[j] != 0.0 {
+            for bound in [-m[j], m[j]] {
+                let mu = (bound - u_nom[j]) / g[j];
+                if mu > 0.0 {
+                    kinks[nk] = mu;
+                    nk += 1;
+                }
+            }
+        }
+    }
+    kinks[..nk].sort_unstable_by(f64::total_cmp);
+    let phi = |mu: f64| -> f64 { (0..d).map(|j| g[j] * clamp(j, u_nom[j] + mu * g[j])).sum() };
+    let (mut lo, mut phi_lo) = (0.0, phi(0.0));
+    let mut mu_star = None;
+    for &k in &kinks[..nk] {
+        let phi_k = phi(k);
+        if phi_k >= b {
+            let slope = (phi_k - phi_lo) / (k - lo);
+            mu_star = Some(lo + (b - phi_lo) / slope);
+            break;
+        }
+        (lo, phi_lo) = (k, phi_k);
+    }
+    // Past the last kink φ is constant at `reach` ≥ b, so the loop found the segment unless
+    // rounding put φ(last kink) a hair below b: take the last kink then.
+    let mu = mu_star.unwrap_or(lo);
+    for j in 0..d {
+        u[j] = clamp(j, u_nom[j] + mu * g[j]);
+    }
+    QpSolution { u, active: true, feasible: true }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clamp_after_projection_is_not_the_optimum() {
+        // g = (1, 1)/√2 style row: u_x + u_y ≥ 1.5 from u_nom = (1.5, −1) in |u| ≤ 1.
+        let s = project_halfspace_box(&[1.5, -1.0], &[1.0, 1.0], 1.5, Some(&[1.0, 1.0]), 1e-9);
+        assert!(s.feasible && s.active);
+        assert!((s.u[0] - 1.0).abs() < 1e-12 && (s.u[1] - 0.5).abs() < 1e-12, "{:?}", s.u);
+        // naive: project (μ = 1) → (2.5, 0), then clamp → (1, 0), which violates the row
+        let naive = [1.0f64, 0.0];
+        assert!(naive[0] + naive[1] < 1.5);
+    }
+
+    #[test]
+    fn infeasible_box_returns_least_violating_command() {
+        let s = project_halfspace_box(&[0.3, 0.2], &[1.0, -2.0], 5.0, Some(&[1.0, 0.5]), 1e-9);
+        assert!(!s.feasible);
+        assert_eq!(&s.u[..2], &[1.0, -0.5]);
+    }
+
+    #[test]
+    fn vanishing_gradient_with_violation_stops() {
+        let s = project_halfspace_box(&[0.3, 0.2], &[0.0, 0.0], 0.1, None, 1e-9);
+        assert!(!s.feasible && s.active);
+        assert_eq!(s.u, [0.0; 3]);
+    }
+
+    #[test]
+    fn unconstrained_when_row_holds() {
+        let s = project_halfspace_box(&[0.3, 0.2, -0.1], &[1.0, 0.0, 0.0], -1.0, None, 1e-9);
+        assert!(s.feasible && !s.active);
+        assert_eq!(&s.u, &[0.3, 0.2, -0.1]);
+    }
+}
