@@ -1,1 +1,16 @@
-//! placeholder
+//! `shieldnav._core`: the thin PyO3 layer over `shieldnav-core`. Each method extracts and
+//! validates its arguments, calls the core, and maps errors to the exceptions of
+//! `shieldnav.exceptions`; nothing here computes.
+
+use pyo3::prelude::*;
+
+mod errors;
+mod shield;
+
+/// The native module.
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    shield::register(m)?;
+    Ok(())
+}

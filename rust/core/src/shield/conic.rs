@@ -96,9 +96,9 @@ fn settings() -> DefaultSettings<f64> {
     DefaultSettingsBuilder::default()
         .verbose(false)
         .max_iter(100)
-        .tol_feas(1e-9)
-        .tol_gap_abs(1e-9)
-        .tol_gap_rel(1e-9)
+        .tol_feas(1e-12)
+        .tol_gap_abs(1e-12)
+        .tol_gap_rel(1e-12)
         .build()
         .expect("static Clarabel settings are valid")
 }

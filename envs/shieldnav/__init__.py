@@ -1,0 +1,26 @@
+"""shieldnav: corridor-inspection navigation and the composite-CBF safety shield.
+
+The shield (paper Sec. III) filters a nominal velocity against a LIDAR scan::
+
+    from shieldnav import Shield
+    shield = Shield(semi_axes=(0.9, 0.45), method="composite")
+    out = shield.filter(points, u_nom, yaw=0.0, omega=0.0)
+    out.u, out.H, out.feasible
+"""
+
+from shieldnav import exceptions
+from shieldnav._core import Shield, ShieldOutcome, __version__
+from shieldnav.config import SHIELD_DEFAULTS
+from shieldnav.exceptions import InvalidArgumentError, ShieldnavError, SolverError
+
+
+__all__ = [
+    "SHIELD_DEFAULTS",
+    "InvalidArgumentError",
+    "Shield",
+    "ShieldOutcome",
+    "ShieldnavError",
+    "SolverError",
+    "__version__",
+    "exceptions",
+]

@@ -1,0 +1,217 @@
+//! The filter QP and the `Shield` API: exactness against Clarabel, the paper's doorway, the
+//! odometry-jump invariance, fallbacks and input validation.
+
+mod common;
+
+use common::{random_scan, rng, rot_rpy};
+use rand::Rng;
+use shieldnav_core::shield::{
+    project_halfspace_box, solve_rows, BodyState, LinearConstraints, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod,
+};
+
+fn shield(method: ShieldMethod) -> Shield {
+    Shield::new(ShieldConfig { method, ..ShieldConfig::default() }).unwrap()
+}
+
+#[test]
+fn closed_form_matches_clarabel_with_and_without_box() {
+    let mut g = rng(21);
+    let mut active = 0;
+    for trial in 0..300 {
+        let d = 2 + trial % 2;
+        let u_nom: Vec<f64> = (0..d).map(|_| g.random_range(-2.0..2.0)).collect();
+        let row: Vec<f64> = (0..d).map(|_| g.random_range(-3.0..3.0)).collect();
+        let b = g.random_range(-2.0..4.0);
+        let bound: Vec<f64> = (0..d).map(|_| g.random_range(0.3..1.5)).collect();
+        for u_max in [None, Some(bound.as_slice())] {
+            let fast = project_halfspace_box(&u_nom, &row, b, u_max, 1e-12);
+            let mut rows = LinearConstraints::new(d);
+            rows.push(&row, b);
+            let slow = solve_rows(&u_nom, &rows, u_max).unwrap();
+            assert_eq!(fast.feasible, slow.feasible, "trial {trial}");
+            if fast.feasible {
+                for j in 0..d {
+                    assert!((fast.u[j] - slow.u[j]).abs() < 1e-6, "trial {trial}: {:?} vs {:?}", fast.u, slow.u);
+                }
+                // KKT: primal feasibility, and u* − u_nom = μ g + box multipliers
+                let gu: f64 = (0..d).map(|j| row[j] * fast.u[j]).sum();
+                assert!(gu >= b - 1e-9);
+                if fast.active {
+                    active += 1;
+                }
+            } else {
+                // least violation: u maximises gᵀu over the box
+                let m = u_max.unwrap();
+                for j in 0..d {
+                    assert_eq!(fast.u[j], m[j].copysign(row[j]));
+                }
+            }
+        }
+    }
+    assert!(active > 100, "most random cases should bind ({active})");
+}
+
+fn doorway(width: f64) -> Vec<f64> {
+    // a 0.2 m thick wall across x = 0 with a gap of `width` centred on the robot, points
+    // every 2 cm on its faces and on the jambs
+    let mut pts = Vec::new();
+    let half = width / 2.0;
+    let mut y = half;
+    while y < 3.0 {
+        for x in [-0.1, 0.1] {
+            pts.extend_from_slice(&[x, y, x, -y]);
+        }
+        y += 0.02;
+    }
+    for k in 1..10 {
+        let x = -0.1 + 0.02 * k as f64;
+        pts.extend_from_slice(&[x, half, x, -half]);
+    }
+    pts
+}
+
+#[test]
+fn distance_baseline_is_infeasible_in_a_doorway_the_ellipse_passes_untouched() {
+    let pts = doorway(1.3);
+    let scan = Scan::new_f64(&pts, 2).unwrap();
+    let state = BodyState::planar(0.0, 0.0).unwrap();
+    let u_nom = [0.8, 0.0];
+    let comp = shield(ShieldMethod::Composite).filter(&scan, &state, &u_nom).unwrap();
+    assert!(comp.feasible && !comp.active, "{comp:?}");
+    assert_eq!(&comp.u[..2], &u_nom);
+    assert!(comp.value > 0.0 && comp.h_min > 0.0);
+    let dist = shield(ShieldMethod::Distance).filter(&scan, &state, &u_nom).unwrap();
+    assert!(!dist.feasible, "{dist:?}");
+    assert!(dist.h_min < 0.0);
+    assert!(dist.u[0] < 0.5, "the fallback must not push on through: {:?}", dist.u);
+}
+
+#[test]
+fn odometry_jump_moving_robot_and_points_together_changes_nothing() {
+    let mut g = rng(3);
+    for (dim, axes) in [(2usize, vec![0.9, 0.45]), (3, vec![0.9, 0.45, 0.3])] {
+        let cfg = ShieldConfig { semi_axes: axes, u_max: Some(vec![1.0; dim]), ..ShieldConfig::default() };
+        let mut s = Shield::new(cfg).unwrap();
+        let body = random_scan(&mut g, 400, dim, 2.0);
+        let (state, r) = if dim == 2 {
+            (BodyState::planar(0.9, 0.3).unwrap(), shieldnav_core::math::rot_z(0.9))
+        } else {
+            let r = rot_rpy(0.1, -0.1, 0.9);
+            (BodyState::spatial(r, [0.1, 0.0, 0.3]).unwrap(), r)
+        };
+        let u_nom = vec![0.7; dim];
+        let mut outs = Vec::new();
+        for offset in [0.0, 137.5, -2500.0] {
+            let pos = [3.0 + offset, -4.0 - offset, if dim == 3 { 0.5 } else { 0.0 }];
+            let world: Vec<f64> = body
+                .chunks(dim)
+                .flat_map(|c| {
+                    let p = [c[0], c[1], if dim == 3 { c[2] } else { 0.0 }];
+                    let w = shieldnav_core::math::mat_vec(&r, &p);
+                    (0..dim).map(move |k| w[k] + pos[k]).collect::<Vec<_>>()
+                })
+                .collect();
+            outs.push(s.filter_world(&Scan::new_f64(&world, dim).unwrap(), &pos, &state, &u_nom, None).unwrap());
+        }
+        assert!(outs[0].active, "the scan should constrain the command");
+        for o in &outs[1..] {
+            for j in 0..dim {
+                assert!((o.u[j] - outs[0].u[j]).abs() < 1e-9, "{:?} vs {:?}", o.u, outs[0].u);
+            }
+            assert!((o.value - outs[0].value).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn hardmin_uses_the_nearest_point_only() {
+    let pts = [2.0, 0.0, 0.0, 0.6, -1.5, -1.5];
+    let scan = Scan::new_f64(&pts, 2).unwrap();
+    let state = BodyState::planar(0.0, 0.0).unwrap();
+    let o = shield(ShieldMethod::HardMin).filter(&scan, &state, &[0.0, 1.0]).unwrap();
+    let h_near = 0.36 / 0.2025 - 1.0;
+    assert!((o.value - h_near).abs() < 1e-12);
+    // row: ∂h/∂p = (0, −2·0.6/0.2025); u_y ≤ α h / (2·0.6/0.2025)
+    let limit = 2.0 * h_near / (1.2 / 0.2025);
+    assert!((o.u[1] - limit).abs() < 1e-12 && o.active);
+}
+
+#[test]
+fn unfiltered_reports_but_never_changes_the_command() {
+    let pts = doorway(0.6);
+    let o = shield(ShieldMethod::Unfiltered).filter(&Scan::new_f64(&pts, 2).unwrap(), &BodyState::planar(0.0, 0.0).unwrap(), &[0.0, 3.0]).unwrap();
+    assert_eq!(&o.u[..2], &[0.0, 3.0]);
+    assert!(o.value < 0.0 && !o.active);
+}
+
+#[test]
+fn extra_rows_are_honoured_through_clarabel() {
+    let mut s = Shield::new(ShieldConfig { u_max: Some(vec![1.0, 1.0]), ..ShieldConfig::default() }).unwrap();
+    let pts = [0.0, 0.7];
+    let scan = Scan::new_f64(&pts, 2).unwrap();
+    let state = BodyState::planar(0.0, 0.0).unwrap();
+    let extra = LinearConstraints::from_rows(2, &[-1.0, 0.0], &[-0.3]).unwrap(); // u_x ≤ 0.3
+    let o = s.filter_with(&scan, &state, &[1.0, 1.0], Some(&extra)).unwrap();
+    assert!(o.feasible && o.active);
+    assert!(o.u[0] <= 0.3 + 1e-7);
+    let plain = s.filter(&scan, &state, &[1.0, 1.0]).unwrap();
+    assert!((o.u[1] - plain.u[1]).abs() < 1e-5, "the CBF row still binds u_y: {:?} vs {:?}", o.u, plain.u);
+}
+
+#[test]
+fn crop_band_and_downsampling_count_points() {
+    let mut g = rng(17);
+    let pts = random_scan(&mut g, 50_000, 3, 5.0);
+    let scan = Scan::new_f64(&pts, 3).unwrap();
+    let state = BodyState::planar(0.0, 0.0).unwrap();
+    let expect = pts
+        .chunks(3)
+        .filter(|c| c[0].hypot(c[1]) <= 3.5 && c[2] >= -0.4 && c[2] <= 1.5)
+        .count();
+    let o = shield(ShieldMethod::Composite).filter(&scan, &state, &[0.0, 0.0]).unwrap();
+    assert_eq!(o.num_points, expect);
+    let mut coarse = Shield::new(ShieldConfig { scan: ScanFilter { angular_bins: Some(360), ..ScanFilter::default() }, ..ShieldConfig::default() }).unwrap();
+    let oc = coarse.filter(&scan, &state, &[0.0, 0.0]).unwrap();
+    assert!(oc.num_points <= 360 && oc.num_points > 300);
+    // the nearest point of each bin is kept, so h_min is unchanged
+    assert_eq!(oc.h_min, o.h_min);
+    let mut vox = Shield::new(ShieldConfig { scan: ScanFilter { voxel_size: Some(0.5), ..ScanFilter::default() }, ..ShieldConfig::default() }).unwrap();
+    let ov = vox.filter(&scan, &state, &[0.0, 0.0]).unwrap();
+    assert!(ov.num_points < o.num_points && ov.h_min == o.h_min);
+}
+
+#[test]
+fn bad_inputs_are_errors_naming_the_argument() {
+    let bad = |cfg: ShieldConfig, name: &str| {
+        let e = Shield::new(cfg).unwrap_err().to_string();
+        assert!(e.contains(name), "{e}");
+    };
+    bad(ShieldConfig { gamma: 0.0, ..ShieldConfig::default() }, "gamma");
+    bad(ShieldConfig { kappa: -1.0, ..ShieldConfig::default() }, "kappa");
+    bad(ShieldConfig { alpha: f64::NAN, ..ShieldConfig::default() }, "alpha");
+    bad(ShieldConfig { semi_axes: vec![0.9, 0.0], ..ShieldConfig::default() }, "semi_axes");
+    bad(ShieldConfig { u_max: Some(vec![1.0]), ..ShieldConfig::default() }, "u_max");
+    bad(ShieldConfig { scan: ScanFilter { crop_radius: Some(-1.0), ..ScanFilter::default() }, ..ShieldConfig::default() }, "crop_radius");
+    let mut s = shield(ShieldMethod::Composite);
+    let st = BodyState::planar(0.0, 0.0).unwrap();
+    let pts = [1.0, 1.0];
+    let scan = Scan::new_f64(&pts, 2).unwrap();
+    assert!(s.filter(&scan, &st, &[1.0]).unwrap_err().to_string().contains("u_nom"));
+    assert!(s.filter(&scan, &st, &[1.0, f64::NAN]).unwrap_err().to_string().contains("u_nom"));
+    let nan = [1.0, f64::NAN];
+    assert!(s.filter(&Scan::new_f64(&nan, 2).unwrap(), &st, &[1.0, 0.0]).unwrap_err().to_string().contains("points"));
+    let mut s3 = Shield::new(ShieldConfig { semi_axes: vec![0.9, 0.45, 0.3], ..ShieldConfig::default() }).unwrap();
+    assert!(s3.filter(&scan, &st, &[1.0, 0.0, 0.0]).unwrap_err().to_string().contains("points"));
+    assert!(BodyState::spatial([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 1.0]], [0.0; 3]).is_err());
+    assert!(Scan::new_f64(&[1.0, 2.0, 3.0], 2).is_err());
+}
+
+#[test]
+fn empty_scan_is_valid_and_leaves_the_command() {
+    for m in [ShieldMethod::Composite, ShieldMethod::Distance, ShieldMethod::HardMin, ShieldMethod::Unfiltered] {
+        let o = shield(m).filter(&Scan::new_f64(&[], 2).unwrap(), &BodyState::planar(0.0, 0.0).unwrap(), &[0.4, -0.2]).unwrap();
+        assert_eq!(&o.u[..2], &[0.4, -0.2], "{m:?}");
+        assert!(o.feasible && !o.active && o.num_points == 0);
+        assert!(o.value.is_finite() && o.h_min.is_finite());
+    }
+}

@@ -1,0 +1,377 @@
+//! `Shield` and `ShieldOutcome`.
+
+use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArray, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use shieldnav_core::math::{rot_z, Mat3};
+use shieldnav_core::shield::{BodyState, LinearConstraints, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod, ShieldOutcome};
+
+use crate::errors::{invalid, to_py};
+
+/// Scans with at least this many points release the GIL while the core runs.
+const DETACH_POINTS: usize = 4096;
+
+/// A float vector from a 1-D numpy array or any sequence of numbers.
+fn vector(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    if let Ok(a) = obj.extract::<PyReadonlyArray1<f64>>() {
+        return Ok(a.as_array().to_vec());
+    }
+    obj.extract::<Vec<f64>>().map_err(|_| invalid(name, "expected a 1-D sequence of numbers"))
+}
+
+/// Either a borrowed float32 or float64 `(N, 2|3)` C-contiguous array.
+enum PointsArg<'py> {
+    F32(PyReadonlyArray2<'py, f32>),
+    F64(PyReadonlyArray2<'py, f64>),
+}
+
+impl<'py> PointsArg<'py> {
+    fn extract(obj: &Bound<'py, PyAny>) -> PyResult<Self> {
+        let Ok(arr) = obj.cast::<PyUntypedArray>() else {
+            return Err(invalid("points", format!("expected a numpy array of shape (N, 2) or (N, 3), got {}", obj.get_type().name()?)));
+        };
+        if arr.ndim() != 2 || !(arr.shape()[1] == 2 || arr.shape()[1] == 3) {
+            return Err(invalid("points", format!("expected shape (N, 2) or (N, 3), got {:?}", arr.shape())));
+        }
+        if !arr.is_c_contiguous() {
+            return Err(invalid("points", "must be C-contiguous (use np.ascontiguousarray)"));
+        }
+        if let Ok(a) = obj.extract::<PyReadonlyArray2<f32>>() {
+            return Ok(Self::F32(a));
+        }
+        if let Ok(a) = obj.extract::<PyReadonlyArray2<f64>>() {
+            return Ok(Self::F64(a));
+        }
+        Err(invalid("points", format!("dtype must be float32 or float64, got {}", arr.dtype())))
+    }
+
+    fn scan(&self) -> PyResult<Scan<'_>> {
+        let r = match self {
+            Self::F32(a) => Scan::new_f32(a.as_slice().map_err(|e| invalid("points", e))?, a.shape()[1]),
+            Self::F64(a) => Scan::new_f64(a.as_slice().map_err(|e| invalid("points", e))?, a.shape()[1]),
+        };
+        r.map_err(to_py)
+    }
+}
+
+/// The composite-CBF safety shield (paper Sec. III) and its baselines. See `shieldnav.Shield`.
+#[pyclass(name = "Shield", module = "shieldnav._core")]
+pub struct PyShield {
+    inner: Shield,
+}
+
+#[pymethods]
+impl PyShield {
+    #[new]
+    #[pyo3(signature = (
+        semi_axes = ShieldConfig::default().semi_axes,
+        gamma = ShieldConfig::default().gamma,
+        kappa = ShieldConfig::default().kappa,
+        alpha = ShieldConfig::default().alpha,
+        crop_radius = ShieldConfig::default().scan.crop_radius,
+        u_max = ShieldConfig::default().u_max,
+        method = ShieldConfig::default().method.name(),
+        safety_distance = ShieldConfig::default().safety_distance,
+        height_band = ShieldConfig::default().scan.height_band,
+        voxel_size = ShieldConfig::default().scan.voxel_size,
+        angular_bins = ShieldConfig::default().scan.angular_bins,
+        grad_eps = ShieldConfig::default().grad_eps,
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        semi_axes: Vec<f64>,
+        gamma: f64,
+        kappa: f64,
+        alpha: f64,
+        crop_radius: Option<f64>,
+        u_max: Option<Vec<f64>>,
+        method: &str,
+        safety_distance: f64,
+        height_band: Option<(f64, f64)>,
+        voxel_size: Option<f64>,
+        angular_bins: Option<usize>,
+        grad_eps: f64,
+    ) -> PyResult<Self> {
+        let config = ShieldConfig {
+            semi_axes,
+            gamma,
+            kappa,
+            alpha,
+            u_max,
+            method: ShieldMethod::parse(method).map_err(to_py)?,
+            safety_distance,
+            scan: ScanFilter { crop_radius, height_band, voxel_size, angular_bins },
+            grad_eps,
+        };
+        Ok(Self { inner: Shield::new(config).map_err(to_py)? })
+    }
+
+    /// Filters `u_nom` against a body-frame scan. See `shieldnav.Shield.filter`.
+    #[pyo3(signature = (points, u_nom, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None))]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
+    fn filter(
+        &mut self,
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        u_nom: &Bound<'_, PyAny>,
+        yaw: Option<f64>,
+        omega: Option<&Bound<'_, PyAny>>,
+        rotation: Option<&Bound<'_, PyAny>>,
+        extra_A: Option<&Bound<'_, PyAny>>,
+        extra_b: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyShieldOutcome> {
+        self.run(py, points, u_nom, None, yaw, omega, rotation, extra_A, extra_b)
+    }
+
+    /// Like `filter`, for world-frame points and the robot at `position`.
+    #[pyo3(signature = (points, u_nom, position, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None))]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
+    fn filter_world(
+        &mut self,
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        u_nom: &Bound<'_, PyAny>,
+        position: &Bound<'_, PyAny>,
+        yaw: Option<f64>,
+        omega: Option<&Bound<'_, PyAny>>,
+        rotation: Option<&Bound<'_, PyAny>>,
+        extra_A: Option<&Bound<'_, PyAny>>,
+        extra_b: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyShieldOutcome> {
+        self.run(py, points, u_nom, Some(position), yaw, omega, rotation, extra_A, extra_b)
+    }
+
+    /// The configuration as a dict of the constructor's keyword arguments.
+    #[getter]
+    fn config<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        config_dict(py, self.inner.config())
+    }
+
+    /// 2 for a planar shield, 3 for 3D.
+    #[getter]
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+
+    /// The method name.
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.config().method.name()
+    }
+
+    /// The SIMD level of the composite kernel on this CPU.
+    #[getter]
+    fn simd_level(&self) -> String {
+        format!("{:?}", self.inner.simd_level()).to_lowercase()
+    }
+
+    fn __repr__(&self) -> String {
+        let c = self.inner.config();
+        format!(
+            "Shield(semi_axes={:?}, gamma={}, kappa={}, alpha={}, crop_radius={:?}, u_max={:?}, method={:?})",
+            c.semi_axes, c.gamma, c.kappa, c.alpha, c.scan.crop_radius, c.u_max, c.method.name()
+        )
+    }
+}
+
+impl PyShield {
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &mut self,
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        u_nom: &Bound<'_, PyAny>,
+        position: Option<&Bound<'_, PyAny>>,
+        yaw: Option<f64>,
+        omega: Option<&Bound<'_, PyAny>>,
+        rotation: Option<&Bound<'_, PyAny>>,
+        extra_a: Option<&Bound<'_, PyAny>>,
+        extra_b: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyShieldOutcome> {
+        let dim = self.inner.dim();
+        let pts = PointsArg::extract(points)?;
+        let scan = pts.scan()?;
+        let u = vector("u_nom", u_nom)?;
+        let state = body_state(dim, yaw, omega, rotation)?;
+        let extra = extra_rows(dim, extra_a, extra_b)?;
+        let position = match position {
+            Some(p) => {
+                let v = vector("position", p)?;
+                if v.len() != dim {
+                    return Err(invalid("position", format!("expected {dim} values, got {}", v.len())));
+                }
+                let mut a = [0.0; 3];
+                a[..dim].copy_from_slice(&v);
+                Some(a)
+            }
+            None => None,
+        };
+        let heavy = scan.len() >= DETACH_POINTS || extra.is_some() || self.inner.config().method == ShieldMethod::Distance;
+        let shield = &mut self.inner;
+        let mut call = || match &position {
+            None => shield.filter_with(&scan, &state, &u, extra.as_ref()),
+            Some(p) => shield.filter_world(&scan, p, &state, &u, extra.as_ref()),
+        };
+        let out = if heavy { py.detach(call) } else { call() };
+        Ok(PyShieldOutcome { inner: out.map_err(to_py)? })
+    }
+}
+
+fn body_state(dim: usize, yaw: Option<f64>, omega: Option<&Bound<'_, PyAny>>, rotation: Option<&Bound<'_, PyAny>>) -> PyResult<BodyState> {
+    if dim == 2 {
+        if rotation.is_some() {
+            return Err(invalid("rotation", "a planar shield takes `yaw` (rad), not a 3x3 rotation"));
+        }
+        let w = match omega {
+            None => 0.0,
+            Some(o) => o.extract::<f64>().map_err(|_| invalid("omega", "a planar shield takes a scalar yaw rate (rad/s)"))?,
+        };
+        return BodyState::planar(yaw.unwrap_or(0.0), w).map_err(to_py);
+    }
+    let r: Mat3 = match (rotation, yaw) {
+        (Some(_), Some(_)) => return Err(invalid("rotation", "give either `rotation` or `yaw`, not both")),
+        (Some(r), None) => {
+            let m = r.extract::<PyReadonlyArray2<f64>>().map_err(|_| invalid("rotation", "expected a 3x3 float array"))?;
+            let a = m.as_array();
+            if a.shape() != [3, 3] {
+                return Err(invalid("rotation", format!("expected shape (3, 3), got {:?}", a.shape())));
+            }
+            let mut out = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    out[i][j] = a[[i, j]];
+                }
+            }
+            out
+        }
+        (None, y) => rot_z(y.unwrap_or(0.0)),
+    };
+    let w = match omega {
+        None => [0.0; 3],
+        Some(o) => {
+            let v = vector("omega", o)?;
+            if v.len() != 3 {
+                return Err(invalid("omega", format!("a 3D shield takes the body angular velocity (3 values), got {}", v.len())));
+            }
+            [v[0], v[1], v[2]]
+        }
+    };
+    BodyState::spatial(r, w).map_err(to_py)
+}
+
+fn extra_rows(dim: usize, a: Option<&Bound<'_, PyAny>>, b: Option<&Bound<'_, PyAny>>) -> PyResult<Option<LinearConstraints>> {
+    match (a, b) {
+        (None, None) => Ok(None),
+        (Some(_), None) | (None, Some(_)) => Err(invalid("extra_A", "give extra_A and extra_b together")),
+        (Some(a), Some(b)) => {
+            let m = a.extract::<PyReadonlyArray2<f64>>().map_err(|_| invalid("extra_A", "expected a 2-D float64 array (M, dim)"))?;
+            let shape = m.as_array().shape().to_vec();
+            if shape[1] != dim {
+                return Err(invalid("extra_A", format!("expected {dim} columns, got shape {shape:?}")));
+            }
+            let rows: Vec<f64> = m.as_array().iter().copied().collect();
+            let rhs = vector("extra_b", b)?;
+            LinearConstraints::from_rows(dim, &rows, &rhs).map(Some).map_err(to_py)
+        }
+    }
+}
+
+fn config_dict<'py>(py: Python<'py>, c: &ShieldConfig) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("semi_axes", c.semi_axes.clone())?;
+    d.set_item("gamma", c.gamma)?;
+    d.set_item("kappa", c.kappa)?;
+    d.set_item("alpha", c.alpha)?;
+    d.set_item("crop_radius", c.scan.crop_radius)?;
+    d.set_item("u_max", c.u_max.clone())?;
+    d.set_item("method", c.method.name())?;
+    d.set_item("safety_distance", c.safety_distance)?;
+    d.set_item("height_band", c.scan.height_band)?;
+    d.set_item("voxel_size", c.scan.voxel_size)?;
+    d.set_item("angular_bins", c.scan.angular_bins)?;
+    d.set_item("grad_eps", c.grad_eps)?;
+    Ok(d)
+}
+
+/// The paper's defaults, as the keyword arguments of `Shield(...)`.
+#[pyfunction]
+fn shield_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    config_dict(py, &ShieldConfig::default())
+}
+
+/// What one `Shield.filter` call produced. Arrays are built when read.
+#[pyclass(name = "ShieldOutcome", module = "shieldnav._core", frozen)]
+pub struct PyShieldOutcome {
+    inner: ShieldOutcome,
+}
+
+#[pymethods]
+impl PyShieldOutcome {
+    /// Filtered world-frame command u* (float64, length dim).
+    #[getter]
+    fn u<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.inner.u[..self.inner.dim])
+    }
+    /// The barrier value H (see the method's docs for what H is per method).
+    #[getter(H)]
+    fn h(&self) -> f64 {
+        self.inner.value
+    }
+    /// min_i h_i (float max when no point was used).
+    #[getter]
+    fn h_min(&self) -> f64 {
+        self.inner.h_min
+    }
+    /// World-frame dH/dp (float64, length dim).
+    #[getter]
+    fn grad_p<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.inner.grad_p[..self.inner.dim])
+    }
+    /// dH/dt caused by the robot's rotation.
+    #[getter(dH_dt)]
+    fn dh_dt(&self) -> f64 {
+        self.inner.dh_dt
+    }
+    /// Points used after crop, height band and down-sampling.
+    #[getter]
+    fn num_points(&self) -> usize {
+        self.inner.num_points
+    }
+    /// The constraints changed the command (beyond clamping u_nom to the box).
+    #[getter]
+    fn active(&self) -> bool {
+        self.inner.active
+    }
+    /// The constraints could be met; if not, u is the documented fallback.
+    #[getter]
+    fn feasible(&self) -> bool {
+        self.inner.feasible
+    }
+    /// Wall time of the whole call inside the core (ns).
+    #[getter]
+    fn solve_time_ns(&self) -> u64 {
+        self.inner.solve_time_ns
+    }
+
+    fn __repr__(&self) -> String {
+        let o = &self.inner;
+        format!(
+            "ShieldOutcome(u={:?}, H={:.6}, h_min={:.6}, num_points={}, active={}, feasible={}, solve_time_ns={})",
+            &o.u[..o.dim],
+            o.value,
+            o.h_min,
+            o.num_points,
+            o.active,
+            o.feasible,
+            o.solve_time_ns
+        )
+    }
+}
+
+/// Adds the shield classes to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyShield>()?;
+    m.add_class::<PyShieldOutcome>()?;
+    m.add_function(wrap_pyfunction!(shield_defaults, m)?)?;
+    Ok(())
+}
