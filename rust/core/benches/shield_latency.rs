@@ -3,7 +3,7 @@
 //!
 //! `cargo bench -p shieldnav-core --bench shield_latency`
 
-use shieldnav_core::shield::{BodyState, Scan, Shield, ShieldConfig};
+use shieldnav_core::shield::{BodyState, Scan, Shield, ShieldConfig, SimdLevel};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -15,12 +15,19 @@ fn main() {
     if std::env::args().any(|a| a == "--list") {
         return;
     }
+    // SHIELDNAV_SIMD=portable|avx2|avx512 pins the kernel's level (default: the best).
+    let level = match std::env::var("SHIELDNAV_SIMD").as_deref() {
+        Ok("portable") => SimdLevel::Portable,
+        Ok("avx2") => SimdLevel::Avx2,
+        Ok("avx512") => SimdLevel::Avx512,
+        _ => SimdLevel::detect(),
+    };
     println!("| dim | N | median µs | p99.6 µs | max µs | SIMD |");
     println!("|---|---:|---:|---:|---:|---|");
     for dim in [2usize, 3] {
         for &n in &SIZES {
             let axes = if dim == 2 { vec![0.9, 0.45] } else { vec![0.9, 0.45, 0.3] };
-            let mut s = Shield::new(ShieldConfig { semi_axes: axes, u_max: Some(vec![1.0; dim]), ..ShieldConfig::default() }).unwrap();
+            let mut s = Shield::new(ShieldConfig { semi_axes: axes, u_max: Some(vec![1.0; dim]), ..ShieldConfig::default() }).unwrap().with_simd_level(level).unwrap();
             let pts: Vec<f32> = corridor_scan(n, dim, 7).iter().map(|&v| v as f32).collect();
             let scan = Scan::new_f32(&pts, dim).unwrap();
             let st = if dim == 2 { BodyState::planar(0.3, 0.2).unwrap() } else { BodyState::spatial(shieldnav_core::math::rot_z(0.3), [0.0, 0.0, 0.2]).unwrap() };

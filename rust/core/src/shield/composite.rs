@@ -4,9 +4,11 @@
 //! `∂H/∂p = Σ_i λ_i sech²(h_i/γ) ∂h_i/∂p`, `∂H/∂t = Σ_i λ_i sech²(h_i/γ) ∂h_i/∂t`,
 //! `λ_i = exp(−κ tanh(h_i/γ)) / Σ_j exp(−κ tanh(h_j/γ))`.
 //!
-//! Numerics: a first pass finds `min h_i` (and rejects NaN/inf); the log-sum-exp is shifted
-//! by the largest exponent `−κ tanh(h_min/γ)`, so every term lies in `[e^{−2κ}, 1]` and the
-//! sum is at least 1: nothing overflows at any κ and `log` never sees 0. `tanh` and `sech²`
+//! Numerics: the log-sum-exp is shifted so that no term exceeds 1 and none underflows to 0:
+//! by the constant `κ` in a single fused pass while `κ ≤ 40` (`f32`) or `κ ≤ 340` (`f64`), so
+//! every term lies in `[e^{−2κ}, 1]`, a normal number; for larger `κ` a first pass finds
+//! `min h_i` and the shift is the largest exponent `−κ tanh(h_min/γ)`, so the sum is at least 1.
+//! Nothing overflows at any κ and `log` never sees 0. The same pass rejects NaN/inf. `tanh` and `sech²`
 //! come from one `e = exp(−2|x|)`: `tanh x = sign(x)(1−e)/(1+e)`, `sech² x = 4e/(1+e)²`,
 //! accurate in relative terms where `1 − tanh²` would cancel to 0. The reported `H` is
 //! finally capped by `γ tanh(h_min/γ)`, the bound of the paper's Remark 1, so `H ≥ 0 ⇒ h_i ≥ 0`
@@ -141,9 +143,9 @@ fn mask_h<T: Lane, const S: usize, const D: usize>(x: T, y: T, z: T, k: &Coeffs<
 
 /// `(tanh x, sech² x)` from one exponential.
 #[inline(always)]
-fn tanh_sech2<T: Lane>(x: T) -> (T, T) {
+fn tanh_sech2<T: Lane, const F: bool>(x: T) -> (T, T) {
     let ax = x.abs();
-    let e = T::exp_nonpos(-(ax + ax));
+    let e = T::exp_nonpos::<F>(-(ax + ax));
     let inv = T::ONE / (T::ONE + e);
     let th = ((T::ONE - e) * inv).copysign(x);
     let four_e = (e + e) + (e + e);
@@ -155,130 +157,131 @@ fn coords<T: Lane, const S: usize>(p: &[T]) -> (T, T, T) {
     (p[0], p[1], if S == 3 { p[2] } else { T::ZERO })
 }
 
-/// Pass 1: `(min h over kept points, kept count, all coordinates finite)`.
-#[inline(always)]
-fn pass_min<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool) {
-    let mut hmin = [T::INF; L];
-    let mut cnt = [0u32; L];
-    let mut fin = [T::ZERO; L];
-    let blocks = pts.chunks_exact(L * S);
-    let tail = blocks.remainder();
-    for block in blocks {
-        for j in 0..L {
-            let (x, y, z) = coords::<T, S>(&block[j * S..j * S + S]);
-            fin[j] = fin[j] + x * T::ZERO + y * T::ZERO + z * T::ZERO;
-            let (m, h) = mask_h::<T, S, D>(x, y, z, k);
-            let hm = sel(m, h, T::INF);
-            hmin[j] = sel(hm < hmin[j], hm, hmin[j]);
-            cnt[j] += m as u32;
-        }
-    }
-    for p in tail.chunks_exact(S) {
-        let (x, y, z) = coords::<T, S>(p);
-        fin[0] = fin[0] + x * T::ZERO + y * T::ZERO + z * T::ZERO;
-        let (m, h) = mask_h::<T, S, D>(x, y, z, k);
-        let hm = sel(m, h, T::INF);
-        hmin[0] = sel(hm < hmin[0], hm, hmin[0]);
-        cnt[0] += m as u32;
-    }
-    let mut best = T::INF;
-    let mut finite = true;
-    for j in 0..L {
-        best = sel(hmin[j] < best, hmin[j], best);
-        finite &= fin[j] == T::ZERO;
-    }
-    (best, cnt.iter().map(|&c| c as usize).sum(), finite)
+/// Per-lane running state of a pass.
+struct Acc<T, const L: usize> {
+    hmin: [T; L],
+    cnt: [u32; L],
+    fin: [T; L],
+    s: [T; L],
+    cx: [T; L],
+    cy: [T; L],
+    cz: [T; L],
+    cxy: [T; L],
+    cxz: [T; L],
+    cyz: [T; L],
 }
 
-/// Pass 2: the weighted sums, with the log-sum-exp shifted by `shift = −κ tanh(h_min/γ)`.
-#[inline(always)]
-fn pass_sums<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>, shift: T) -> Sums {
-    let mut s = [T::ZERO; L];
-    let mut cx = [T::ZERO; L];
-    let mut cy = [T::ZERO; L];
-    let mut cz = [T::ZERO; L];
-    let mut cxy = [T::ZERO; L];
-    let mut cxz = [T::ZERO; L];
-    let mut cyz = [T::ZERO; L];
-    #[inline(always)]
-    fn point<T: Lane, const S: usize, const D: usize>(p: &[T], k: &Coeffs<T>, shift: T) -> (T, T, T, T, T) {
-        let (x, y, z) = coords::<T, S>(p);
-        let (m, h) = mask_h::<T, S, D>(x, y, z, k);
-        let (th, s2) = tanh_sech2(h * k.inv_gamma);
-        let arg = -(k.kappa * th) - shift;
-        let w = T::exp_nonpos(sel(arg < T::ZERO, arg, T::ZERO));
-        let w = sel(m, w, T::ZERO);
-        (w, w * s2, x, y, z)
+impl<T: Lane, const L: usize> Acc<T, L> {
+    fn new() -> Self {
+        let z = [T::ZERO; L];
+        Self { hmin: [T::INF; L], cnt: [0; L], fin: z, s: z, cx: z, cy: z, cz: z, cxy: z, cxz: z, cyz: z }
     }
-    let blocks = pts.chunks_exact(L * S);
-    let tail = blocks.remainder();
-    for block in blocks {
-        for j in 0..L {
-            let (w, c, x, y, z) = point::<T, S, D>(&block[j * S..j * S + S], k, shift);
-            s[j] = s[j] + w;
-            cx[j] = cx[j] + c * x;
-            cy[j] = cy[j] + c * y;
-            cxy[j] = cxy[j] + c * x * y;
+
+    /// Folds one point into lane `j`. With `SUMS = false` only `min h`, the count and the
+    /// finiteness check run (the first pass of the two-pass mode).
+    #[inline(always)]
+    fn add<const S: usize, const D: usize, const F: bool, const SUMS: bool>(&mut self, j: usize, p: &[T], k: &Coeffs<T>, shift: T) {
+        let (x, y, z) = coords::<T, S>(p);
+        self.fin[j] = self.fin[j] + x * T::ZERO + y * T::ZERO + z * T::ZERO;
+        let (m, h) = mask_h::<T, S, D>(x, y, z, k);
+        let hm = sel(m, h, T::INF);
+        self.hmin[j] = sel(hm < self.hmin[j], hm, self.hmin[j]);
+        self.cnt[j] += m as u32;
+        if SUMS {
+            let (th, s2) = tanh_sech2::<T, F>(h * k.inv_gamma);
+            let arg = T::madd::<F>(-k.kappa, th, -shift);
+            let w = sel(m, T::exp_nonpos::<F>(sel(arg < T::ZERO, arg, T::ZERO)), T::ZERO);
+            let c = w * s2;
+            let (cx, cy) = (c * x, c * y);
+            self.s[j] = self.s[j] + w;
+            self.cx[j] = self.cx[j] + cx;
+            self.cy[j] = self.cy[j] + cy;
+            self.cxy[j] = T::madd::<F>(cx, y, self.cxy[j]);
             if D == 3 {
-                cz[j] = cz[j] + c * z;
-                cxz[j] = cxz[j] + c * x * z;
-                cyz[j] = cyz[j] + c * y * z;
+                self.cz[j] = T::madd::<F>(c, z, self.cz[j]);
+                self.cxz[j] = T::madd::<F>(cx, z, self.cxz[j]);
+                self.cyz[j] = T::madd::<F>(cy, z, self.cyz[j]);
             }
         }
     }
-    for p in tail.chunks_exact(S) {
-        let (w, c, x, y, z) = point::<T, S, D>(p, k, shift);
-        s[0] = s[0] + w;
-        cx[0] = cx[0] + c * x;
-        cy[0] = cy[0] + c * y;
-        cxy[0] = cxy[0] + c * x * y;
-        if D == 3 {
-            cz[0] = cz[0] + c * z;
-            cxz[0] = cxz[0] + c * x * z;
-            cyz[0] = cyz[0] + c * y * z;
+
+    fn finish(&self) -> (T, usize, bool, Sums) {
+        let mut best = T::INF;
+        let mut finite = true;
+        for j in 0..L {
+            best = sel(self.hmin[j] < best, self.hmin[j], best);
+            finite &= self.fin[j] == T::ZERO;
         }
+        let red = |a: &[T; L]| a.iter().map(|v| v.to_f64()).sum::<f64>();
+        let sums = Sums {
+            s: red(&self.s),
+            cx: red(&self.cx),
+            cy: red(&self.cy),
+            cz: red(&self.cz),
+            cxy: red(&self.cxy),
+            cxz: red(&self.cxz),
+            cyz: red(&self.cyz),
+        };
+        (best, self.cnt.iter().map(|&c| c as usize).sum(), finite, sums)
     }
-    let red = |a: &[T; L]| a.iter().map(|v| v.to_f64()).sum::<f64>();
-    Sums { s: red(&s), cx: red(&cx), cy: red(&cy), cz: red(&cz), cxy: red(&cxy), cxz: red(&cxz), cyz: red(&cyz) }
 }
 
+/// One pass over the scan in blocks of `L` points.
 #[inline(always)]
-fn both_passes<T: Lane, const S: usize, const D: usize, const L: usize>(
+fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const SUMS: bool>(
     pts: &[T],
     k: &Coeffs<T>,
+    shift: T,
 ) -> (T, usize, bool, Sums) {
-    let (hmin, n, finite) = pass_min::<T, S, D, L>(pts, k);
-    if !finite || n == 0 {
-        return (hmin, n, finite, Sums::default());
+    let mut acc = Acc::<T, L>::new();
+    let blocks = pts.chunks_exact(L * S);
+    let tail = blocks.remainder();
+    for block in blocks {
+        for j in 0..L {
+            acc.add::<S, D, F, SUMS>(j, &block[j * S..j * S + S], k, shift);
+        }
     }
-    let (th_min, _) = tanh_sech2(hmin * k.inv_gamma);
+    for p in tail.chunks_exact(S) {
+        acc.add::<S, D, F, SUMS>(0, p, k, shift);
+    }
+    acc.finish()
+}
+
+/// Both passes. The log-sum-exp is shifted so its largest term is at most 1: by the constant
+/// `κ` (≥ every `−κ tanh(·)`) in one fused pass when `κ ≤ T::MAX_FIXED_SHIFT`, else by the
+/// exact `−κ tanh(h_min/γ)` found in a first pass.
+#[inline(always)]
+fn both_passes<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool>(
+    pts: &[T],
+    k: &Coeffs<T>,
+) -> (T, usize, bool, Sums, T) {
+    if k.kappa.to_f64() <= T::MAX_FIXED_SHIFT {
+        let (hmin, n, finite, sums) = pass::<T, S, D, L, F, true>(pts, k, k.kappa);
+        return (hmin, n, finite, sums, k.kappa);
+    }
+    let (hmin, n, finite, _) = pass::<T, S, D, L, F, false>(pts, k, T::ZERO);
+    if !finite || n == 0 {
+        return (hmin, n, finite, Sums::default(), T::ZERO);
+    }
+    let (th_min, _) = tanh_sech2::<T, F>(hmin * k.inv_gamma);
     let shift = -(k.kappa * th_min);
-    (hmin, n, finite, pass_sums::<T, S, D, L>(pts, k, shift))
+    let (_, _, _, sums) = pass::<T, S, D, L, F, true>(pts, k, shift);
+    (hmin, n, finite, sums, shift)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn both_passes_avx2<T: Lane, const S: usize, const D: usize, const L: usize>(
-    pts: &[T],
-    k: &Coeffs<T>,
-) -> (T, usize, bool, Sums) {
-    both_passes::<T, S, D, L>(pts, k)
+fn both_passes_avx2<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool, Sums, T) {
+    both_passes::<T, S, D, L, true>(pts, k)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx2,fma")]
-fn both_passes_avx512<T: Lane, const S: usize, const D: usize, const L: usize>(
-    pts: &[T],
-    k: &Coeffs<T>,
-) -> (T, usize, bool, Sums) {
-    both_passes::<T, S, D, L>(pts, k)
+fn both_passes_avx512<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool, Sums, T) {
+    both_passes::<T, S, D, L, true>(pts, k)
 }
 
-fn dispatch<T: Lane, const S: usize, const D: usize, const L: usize>(
-    pts: &[T],
-    k: &Coeffs<T>,
-    level: SimdLevel,
-) -> (T, usize, bool, Sums) {
+fn dispatch<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>, level: SimdLevel) -> (T, usize, bool, Sums, T) {
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY: each arm runs only when the CPU reports the features its build enables.
@@ -293,7 +296,7 @@ fn dispatch<T: Lane, const S: usize, const D: usize, const L: usize>(
         }
     }
     let _ = level;
-    both_passes::<T, S, D, L>(pts, k)
+    both_passes::<T, S, D, L, false>(pts, k)
 }
 
 /// Evaluates the composite barrier over a body-frame scan stored row-major with `stride`
@@ -335,7 +338,7 @@ pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams
         inv_gamma: T::from_f64(1.0 / p.gamma),
         kappa: T::from_f64(p.kappa),
     };
-    let (hmin, n, finite, sums) = match (stride, dim) {
+    let (hmin, n, finite, sums, shift) = match (stride, dim) {
         (2, _) => dispatch::<T, 2, 2, 16>(pts, &k, level),
         (3, 2) => dispatch::<T, 3, 2, 16>(pts, &k, level),
         _ => dispatch::<T, 3, 3, 16>(pts, &k, level),
@@ -346,8 +349,7 @@ pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams
     if n == 0 {
         return Ok(CompositeBarrier { value: p.gamma, h_min: f64::MAX, grad_body: [0.0; 3], dh_dt: 0.0, num_points: 0 });
     }
-    let (th_min, _) = tanh_sech2(hmin * k.inv_gamma);
-    let shift = -(k.kappa * th_min).to_f64();
+    let shift = shift.to_f64();
     let h_min = hmin.to_f64();
     let soft = -(p.gamma / p.kappa) * (shift + sums.s.ln());
     let value = soft.min(p.gamma * (h_min / p.gamma).tanh());

@@ -32,10 +32,16 @@ pub trait Lane:
     fn abs(self) -> Self;
     /// `|self|` with the sign of `sign`.
     fn copysign(self, sign: Self) -> Self;
+    /// `a * b + c`, fused when `FMA` (only instantiate `FMA = true` in code compiled with the
+    /// `fma` target feature; elsewhere it would call libm).
+    fn madd<const FMA: bool>(a: Self, b: Self, c: Self) -> Self;
+    /// Largest `κ` for which the kernel can shift its log-sum-exp by the constant `κ`
+    /// (terms in `[e^{−2κ}, 1]` stay normal numbers) and skip the pass that finds the max.
+    const MAX_FIXED_SHIFT: f64;
     /// `exp(x)` for `x ≤ 0`, relative error below 2 ulp; returns exactly 0 where the result
     /// would be subnormal (x below about −87 for `f32`, −708 for `f64`). NaN is not handled:
     /// callers reject non-finite input first.
-    fn exp_nonpos(x: Self) -> Self;
+    fn exp_nonpos<const FMA: bool>(x: Self) -> Self;
 }
 
 #[inline(always)]
@@ -52,6 +58,15 @@ impl Lane for f32 {
     const ONE: Self = 1.0;
     const INF: Self = f32::INFINITY;
     const NAME: &'static str = "f32";
+    const MAX_FIXED_SHIFT: f64 = 40.0;
+    #[inline(always)]
+    fn madd<const FMA: bool>(a: Self, b: Self, c: Self) -> Self {
+        if FMA {
+            f32::mul_add(a, b, c)
+        } else {
+            a * b + c
+        }
+    }
     #[inline(always)]
     fn from_f64(v: f64) -> Self {
         v as f32
@@ -69,22 +84,22 @@ impl Lane for f32 {
         f32::copysign(self, sign)
     }
     #[inline(always)]
-    fn exp_nonpos(x: Self) -> Self {
+    fn exp_nonpos<const FMA: bool>(x: Self) -> Self {
         // Cephes expf: x = n ln2 + r, |r| ≤ ln2/2, exp(r) by a degree-7 polynomial.
         const MAGIC: f32 = 12_582_912.0; // 1.5 · 2^23: adding it rounds to an integer
         const LOW: f32 = -87.0;
         let under = x < LOW;
         let xc = select(under, LOW, x);
-        let t = xc * core::f32::consts::LOG2_E + MAGIC;
+        let t = Self::madd::<FMA>(xc, core::f32::consts::LOG2_E, MAGIC);
         let n = t - MAGIC;
         let r = xc - n * 0.693_359_4 - n * -2.121_944_4e-4;
         let mut p = 1.987_569_1e-4_f32;
-        p = p * r + 1.398_199_9e-3;
-        p = p * r + 8.333_452e-3;
-        p = p * r + 4.166_579_6e-2;
-        p = p * r + 1.666_666_5e-1;
-        p = p * r + 5.000_000_1e-1;
-        let y = p * r * r + r + 1.0;
+        p = Self::madd::<FMA>(p, r, 1.398_199_9e-3);
+        p = Self::madd::<FMA>(p, r, 8.333_452e-3);
+        p = Self::madd::<FMA>(p, r, 4.166_579_6e-2);
+        p = Self::madd::<FMA>(p, r, 1.666_666_5e-1);
+        p = Self::madd::<FMA>(p, r, 5.000_000_1e-1);
+        let y = Self::madd::<FMA>(p * r, r, r) + 1.0;
         // The low mantissa bits of `t` hold n + 2^22; shifting n + 127 into the exponent
         // field builds 2^n (n ∈ [−126, 0]) with wrapping integer ops only.
         let scale = f32::from_bits(t.to_bits().wrapping_add(127) << 23);
@@ -97,6 +112,15 @@ impl Lane for f64 {
     const ONE: Self = 1.0;
     const INF: Self = f64::INFINITY;
     const NAME: &'static str = "f64";
+    const MAX_FIXED_SHIFT: f64 = 340.0;
+    #[inline(always)]
+    fn madd<const FMA: bool>(a: Self, b: Self, c: Self) -> Self {
+        if FMA {
+            f64::mul_add(a, b, c)
+        } else {
+            a * b + c
+        }
+    }
     #[inline(always)]
     fn from_f64(v: f64) -> Self {
         v
@@ -114,29 +138,29 @@ impl Lane for f64 {
         f64::copysign(self, sign)
     }
     #[inline(always)]
-    fn exp_nonpos(x: Self) -> Self {
+    fn exp_nonpos<const FMA: bool>(x: Self) -> Self {
         // x = n ln2 + r with the fdlibm split of ln2, exp(r) by its Taylor series to r^13
         // (truncation below 5e-18 for |r| ≤ ln2/2).
         const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 · 2^52
         const LOW: f64 = -708.0;
         let under = x < LOW;
         let xc = select(under, LOW, x);
-        let t = xc * core::f64::consts::LOG2_E + MAGIC;
+        let t = Self::madd::<FMA>(xc, core::f64::consts::LOG2_E, MAGIC);
         let n = t - MAGIC;
         let r = xc - n * 6.931_471_803_691_238_164_90e-1 - n * 1.908_214_929_270_587_700_02e-10;
         let mut p = 1.0 / 6_227_020_800.0; // 1/13!
-        p = p * r + 1.0 / 479_001_600.0;
-        p = p * r + 1.0 / 39_916_800.0;
-        p = p * r + 1.0 / 3_628_800.0;
-        p = p * r + 1.0 / 362_880.0;
-        p = p * r + 1.0 / 40_320.0;
-        p = p * r + 1.0 / 5_040.0;
-        p = p * r + 1.0 / 720.0;
-        p = p * r + 1.0 / 120.0;
-        p = p * r + 1.0 / 24.0;
-        p = p * r + 1.0 / 6.0;
-        p = p * r + 0.5;
-        let y = p * r * r + r + 1.0;
+        p = Self::madd::<FMA>(p, r, 1.0 / 479_001_600.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 39_916_800.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 3_628_800.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 362_880.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 40_320.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 5_040.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 720.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 120.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 24.0);
+        p = Self::madd::<FMA>(p, r, 1.0 / 6.0);
+        p = Self::madd::<FMA>(p, r, 0.5);
+        let y = Self::madd::<FMA>(p * r, r, r) + 1.0;
         let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
         select(under, 0.0, y * scale)
     }
@@ -150,7 +174,7 @@ mod tests {
     fn exp_f64_matches_libm_to_two_ulp() {
         let mut x = -707.9_f64;
         while x <= 0.0 {
-            let (got, want) = (f64::exp_nonpos(x), x.exp());
+            let (got, want) = (f64::exp_nonpos::<false>(x), x.exp());
             assert!(((got - want) / want).abs() < 4.5e-16, "x={x} got={got} want={want}");
             x += 0.0137;
         }
@@ -160,7 +184,7 @@ mod tests {
     fn exp_f32_matches_libm_to_two_ulp() {
         let mut x = -86.9_f32;
         while x <= 0.0 {
-            let (got, want) = (f32::exp_nonpos(x) as f64, (x as f64).exp());
+            let (got, want) = (f32::exp_nonpos::<false>(x) as f64, (x as f64).exp());
             assert!(((got - want) / want).abs() < 2.4e-7, "x={x} got={got} want={want}");
             x += 0.00731;
         }
@@ -168,9 +192,9 @@ mod tests {
 
     #[test]
     fn exp_flushes_to_zero_below_the_normal_range() {
-        assert_eq!(f32::exp_nonpos(-1e30), 0.0);
-        assert_eq!(f64::exp_nonpos(-1e300), 0.0);
-        assert_eq!(f32::exp_nonpos(f32::NEG_INFINITY), 0.0);
-        assert_eq!(f64::exp_nonpos(0.0), 1.0);
+        assert_eq!(f32::exp_nonpos::<false>(-1e30), 0.0);
+        assert_eq!(f64::exp_nonpos::<false>(-1e300), 0.0);
+        assert_eq!(f32::exp_nonpos::<false>(f32::NEG_INFINITY), 0.0);
+        assert_eq!(f64::exp_nonpos::<false>(0.0), 1.0);
     }
 }
