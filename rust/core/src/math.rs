@@ -72,3 +72,38 @@ pub fn det(m: &Mat3) -> Real {
     m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
+
+/// `a * b`.
+pub fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
+    let mut m = [[0.0; 3]; 3];
+    for (i, row) in m.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    m
+}
+
+/// `[w]×`, the cross-product matrix: `[w]× v = w × v`.
+pub fn skew(w: &Vec3) -> Mat3 {
+    [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
+}
+
+/// The rotation after turning at constant body rate `omega` (rad/s) for `dt` seconds:
+/// `R exp([ω]× dt)`, by Rodrigues' formula.
+pub fn integrate_rotation(r: &Mat3, omega: &Vec3, dt: Real) -> Mat3 {
+    let n = dot(omega, omega).sqrt();
+    if n == 0.0 {
+        return *r;
+    }
+    let th = n * dt;
+    let k = skew(&[omega[0] / n, omega[1] / n, omega[2] / n]);
+    let k2 = mat_mul(&k, &k);
+    let mut e = IDENTITY;
+    for i in 0..3 {
+        for j in 0..3 {
+            e[i][j] += th.sin() * k[i][j] + (1.0 - th.cos()) * k2[i][j];
+        }
+    }
+    mat_mul(r, &e)
+}

@@ -13,7 +13,7 @@
 //!   (`x, y > 0`), and `∂h/∂t < 0` says the point is getting closer in the ellipse metric.
 
 use crate::error::{Error, Result};
-use crate::math::{cross, dot, mat_t_vec, mat_vec, Mat3, Real, Vec3};
+use crate::math::{cross, dot, mat_mul, mat_t_vec, mat_vec, skew, Mat3, Real, Vec3};
 
 /// An axis-aligned ellipsoid in the body frame, centred on the robot: planar (`a_x, a_y`) or
 /// 3D (`a_x, a_y, a_z`), semi-axes in metres.
@@ -113,20 +113,6 @@ fn diag_mat(a: &Vec3) -> Mat3 {
     [[a[0], 0.0, 0.0], [0.0, a[1], 0.0], [0.0, 0.0, a[2]]]
 }
 
-fn skew(w: &Vec3) -> Mat3 {
-    [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
-}
-
-fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
-    let mut m = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            m[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    m
-}
-
 fn sub_mat(a: &Mat3, b: &Mat3) -> Mat3 {
     let mut m = *a;
     for i in 0..3 {
@@ -151,7 +137,7 @@ fn sandwich(r: &Mat3, m: &Mat3) -> Mat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::rot_z;
+    use crate::math::{integrate_rotation, rot_z};
 
     fn rot_xyz(roll: f64, pitch: f64, yaw: f64) -> Mat3 {
         let (sr, cr) = roll.sin_cos();
@@ -159,24 +145,6 @@ mod tests {
         let rx = [[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]];
         let ry = [[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]];
         mat_mul(&rot_z(yaw), &mat_mul(&ry, &rx))
-    }
-
-    /// `R(t + dt) = R(t) exp([ω]× dt)` to second order, re-orthonormalised by Rodrigues.
-    fn advance(r: &Mat3, w: &Vec3, dt: f64) -> Mat3 {
-        let th = (dot(w, w)).sqrt() * dt;
-        if th == 0.0 {
-            return *r;
-        }
-        let k = [w[0] * dt / th, w[1] * dt / th, w[2] * dt / th];
-        let kx = skew(&k);
-        let kx2 = mat_mul(&kx, &kx);
-        let mut e = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                e[i][j] = if i == j { 1.0 } else { 0.0 } + th.sin() * kx[i][j] + (1.0 - th.cos()) * kx2[i][j];
-            }
-        }
-        mat_mul(r, &e)
     }
 
     #[test]
@@ -188,8 +156,8 @@ mod tests {
         let pw = [2.6, -0.4, 0.7];
         let (_, _, dt) = env.cbf_world(&pw, &pr, &r, &w);
         let eps = 1e-5;
-        let hp = env.cbf_world(&pw, &pr, &advance(&r, &w, eps), &w).0;
-        let hm = env.cbf_world(&pw, &pr, &advance(&r, &w, -eps), &w).0;
+        let hp = env.cbf_world(&pw, &pr, &integrate_rotation(&r, &w, eps), &w).0;
+        let hm = env.cbf_world(&pw, &pr, &integrate_rotation(&r, &w, -eps), &w).0;
         let fd = (hp - hm) / (2.0 * eps);
         assert!((fd - dt).abs() < 1e-7, "fd={fd} analytic={dt}");
         let pb = Envelope::to_body(&pw, &pr, &r);

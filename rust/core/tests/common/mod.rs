@@ -34,34 +34,8 @@ pub fn rot_rpy(roll: f64, pitch: f64, yaw: f64) -> Mat3 {
     ]
 }
 
-pub fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
-    let mut m = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            m[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    m
-}
-
-/// `R exp([ω]× dt)` by Rodrigues.
-pub fn advance(r: &Mat3, w: &Vec3, dt: f64) -> Mat3 {
-    let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-    if n == 0.0 {
-        return *r;
-    }
-    let th = n * dt;
-    let k = [w[0] / n, w[1] / n, w[2] / n];
-    let kx = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
-    let kx2 = mat_mul(&kx, &kx);
-    let mut e = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            e[i][j] = if i == j { 1.0 } else { 0.0 } + th.sin() * kx[i][j] + (1.0 - th.cos()) * kx2[i][j];
-        }
-    }
-    mat_mul(r, &e)
-}
+#[allow(unused_imports)]
+pub use shieldnav_core::math::integrate_rotation as advance;
 
 /// The paper's `H_W`, `∂H_W/∂p_r`, `∂H_W/∂t` by direct world-frame summation (no shift, no
 /// fusion): fine for moderate `κ` and `N`.
