@@ -182,8 +182,11 @@ impl<T: Lane, const L: usize> Acc<T, L> {
     #[inline(always)]
     fn add<const S: usize, const D: usize, const F: bool, const SUMS: bool>(&mut self, j: usize, p: &[T], k: &Coeffs<T>, shift: T) {
         let (x, y, z) = coords::<T, S>(p);
-        self.fin[j] = self.fin[j] + x * T::ZERO + y * T::ZERO + z * T::ZERO;
         let (m, h) = mask_h::<T, S, D>(x, y, z, k);
+        // `h` is NaN or inf whenever a coordinate it uses is (or is too large to square);
+        // the planar height band also reads `z`.
+        let probe = if S == 3 && D == 2 { h + z } else { h };
+        self.fin[j] = self.fin[j] + probe * T::ZERO;
         let hm = sel(m, h, T::INF);
         self.hmin[j] = sel(hm < self.hmin[j], hm, self.hmin[j]);
         self.cnt[j] += m as u32;
@@ -344,7 +347,7 @@ pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams
         _ => dispatch::<T, 3, 3, 16>(pts, &k, level),
     };
     if !finite {
-        return Err(Error::invalid("points", "contains NaN or inf"));
+        return Err(Error::invalid("points", "contains NaN or inf (or a coordinate too large to square)"));
     }
     if n == 0 {
         return Ok(CompositeBarrier { value: p.gamma, h_min: f64::MAX, grad_body: [0.0; 3], dh_dt: 0.0, num_points: 0 });
