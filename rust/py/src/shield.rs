@@ -54,7 +54,32 @@ impl<'py> PointsArg<'py> {
     }
 }
 
-/// The composite-CBF safety shield (paper Sec. III) and its baselines. See `shieldnav.Shield`.
+/// Shield(semi_axes=(0.9, 0.45), gamma=0.9, kappa=8.0, alpha=2.0, crop_radius=3.5, u_max=None,
+///        method="composite", safety_distance=0.8, height_band=(-0.4, 1.5), voxel_size=None,
+///        angular_bins=None, grad_eps=1e-9)
+///
+/// The composite control-barrier-function safety shield (paper Sec. III) and its baselines.
+///
+/// `filter(points, u_nom, yaw=0.0, omega=0.0)` (planar) or
+/// `filter(points, u_nom, rotation=R, omega=w)` (3D) returns the world-frame command
+/// u* = argmin |u - u_nom|^2 s.t. dH/dp . u >= -alpha H - dH/dt, |u| <= u_max.
+///
+/// Arguments:
+///     semi_axes: body-frame ellipsoid semi-axes (m); 2 values planar, 3 values 3D.
+///     gamma, kappa: saturation and sharpness of the soft-min composite (> 0).
+///     alpha: gain of alpha(h) = alpha * h (> 0).
+///     crop_radius: drop points farther than this (m); None keeps all.
+///     u_max: symmetric world-frame velocity box (m/s), one entry per axis; None for no box.
+///     method: "composite", "distance" (one 0.8 m sphere row per point, Clarabel),
+///         "hardmin" (nearest point only) or "none" (no filter, H still reported).
+///     safety_distance: s_d of the distance baseline (m).
+///     height_band: (z_lo, z_hi) body-frame band kept when a planar shield gets (N, 3) points.
+///     voxel_size, angular_bins: optional down-sampling; each keeps the point with the
+///         smallest h per cell. The composite turns conservative like ln(N)/kappa.
+///     grad_eps: below this gradient norm an unmet row counts as infeasible (stop).
+///
+/// Points are float32 or float64 (N, 2) / (N, 3) C-contiguous arrays in the body frame, read
+/// without a copy. Bad input raises shieldnav.InvalidArgumentError (a ValueError).
 #[pyclass(name = "Shield", module = "shieldnav._core")]
 pub struct PyShield {
     inner: Shield,
