@@ -9,7 +9,7 @@ The shield (paper Sec. III) filters a nominal velocity against a LIDAR scan::
 """
 
 from shieldnav import exceptions
-from shieldnav._core import Shield, ShieldOutcome, __version__
+from shieldnav._core import NominalController, Shield, ShieldOutcome, ViewPlanner, __version__
 from shieldnav.config import SHIELD_DEFAULTS
 from shieldnav.exceptions import InvalidArgumentError, ShieldnavError, SolverError
 
@@ -17,10 +17,12 @@ from shieldnav.exceptions import InvalidArgumentError, ShieldnavError, SolverErr
 __all__ = [
     "SHIELD_DEFAULTS",
     "InvalidArgumentError",
+    "NominalController",
     "Shield",
     "ShieldOutcome",
     "ShieldnavError",
     "SolverError",
+    "ViewPlanner",
     "__version__",
     "exceptions",
 ]

@@ -83,3 +83,37 @@ class Shield:
     def simd_level(self) -> str: ...
 
 def shield_defaults() -> dict[str, Any]: ...
+
+_Pose = tuple[npt.NDArray[np.float64], float]
+
+@final
+class ViewPlanner:
+    """The reactive inspection (view) planner of the paper, Sec. IV-A."""
+
+    def __new__(
+        cls,
+        d_view: float = ...,
+        gamma_h: float = ...,
+        fov_h_deg: float = ...,
+        fov_v_deg: float = ...,
+        gamma_v: float = ...,
+        horizon: int = ...,
+        reach_threshold: float = ...,
+    ) -> ViewPlanner: ...
+    def plan(self, points: npt.NDArray[np.float64], position: tuple[float, float], yaw: float) -> _Pose | None: ...
+    def update(self, points: npt.NDArray[np.float64], position: tuple[float, float], yaw: float) -> _Pose | None: ...
+    def predict_path(
+        self, points: npt.NDArray[np.float64], position: tuple[float, float], yaw: float
+    ) -> list[_Pose]: ...
+    def reset(self) -> None: ...
+
+@final
+class NominalController:
+    """u_nom = K_p (p_d - p_hat), saturated, with yaw tracking."""
+
+    def __new__(
+        cls, kp: float = ..., k_yaw: float = ..., u_max: tuple[float, float] = ..., omega_max: float = ...
+    ) -> NominalController: ...
+    def command(
+        self, goal: tuple[float, float], goal_yaw: float, position: tuple[float, float], yaw: float
+    ) -> tuple[npt.NDArray[np.float64], float]: ...

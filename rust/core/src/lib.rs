@@ -7,8 +7,10 @@
 //! Nothing here knows about Python; the `shieldnav-py` crate is a thin translation layer.
 #![warn(missing_docs)]
 
+pub mod control;
 pub mod error;
 pub mod math;
+pub mod planner;
 pub mod shield;
 
 pub use error::{Error, Result};

@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 mod errors;
+mod planner;
 mod shield;
 
 /// The native module.
@@ -12,5 +13,6 @@ mod shield;
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     shield::register(m)?;
+    planner::register(m)?;
     Ok(())
 }

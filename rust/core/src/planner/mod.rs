@@ -1,0 +1,243 @@
+//! The reactive inspection (view) planner of the paper, Sec. IV-A, Eq. (flip):
+//!
+//! `p_d(k+1) = p̂_r(k) + ν_x d_insp + ν_y d_hov + ν_z d_vov`, `ψ(k+1) = atan2(ν_x,y, ν_x,x)`
+//!
+//! with `p_nn` the nearest observed surface point, `ν_x = (p_nn − p̂_r)/‖p_nn − p̂_r‖`,
+//! `ν_y = ν_up × ν_x`, `ν_z = ν_x × ν_y`, `d_insp = ‖p_nn − p̂_r‖ − d_view`,
+//! `d_hov = 2 tan(α/2) ‖p_nn − p̂_r‖ (1 − γ_H)`, `d_vov = 2 tan(β/2) ‖p_nn − p̂_r‖ (1 − γ_V)`.
+//!
+//! It runs on the *estimated* pose: points seen in the body frame are placed in the world with
+//! the odometry estimate, so an odometry jump fools it exactly as in the paper's Scenario 2.
+
+use crate::error::{Error, Result};
+use crate::math::{cross, rot_z, Vec3};
+
+/// Parameters of the view planner; `Default` holds the paper's values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewPlannerConfig {
+    /// Desired viewing distance `d_view` (m).
+    pub d_view: f64,
+    /// Horizontal overlap `γ_H` in `[0, 1)`.
+    pub gamma_h: f64,
+    /// Vertical overlap `γ_V` in `[0, 1]`; 1 ignores vertical motion (the paper's quadruped).
+    pub gamma_v: f64,
+    /// Horizontal camera field of view `α` (rad).
+    pub fov_h: f64,
+    /// Vertical camera field of view `β` (rad).
+    pub fov_v: f64,
+    /// Steps of the predicted inspection path.
+    pub horizon: usize,
+    /// A new reference is planned once the estimate is within this distance (m) of the current one.
+    pub reach_threshold: f64,
+}
+
+impl Default for ViewPlannerConfig {
+    fn default() -> Self {
+        Self {
+            d_view: 1.5,
+            gamma_h: 0.5,
+            gamma_v: 1.0,
+            fov_h: 69.4_f64.to_radians(),
+            fov_v: 45.0_f64.to_radians(),
+            horizon: 5,
+            reach_threshold: 0.3,
+        }
+    }
+}
+
+/// A reference view pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewPose {
+    /// Desired position `p_d` (world frame, m); `z = 0` for planar use.
+    pub position: Vec3,
+    /// Desired yaw `ψ` (rad).
+    pub yaw: f64,
+}
+
+/// The stateful reactive view planner: holds the current reference.
+#[derive(Debug, Clone)]
+pub struct ViewPlanner {
+    config: ViewPlannerConfig,
+    current: Option<ViewPose>,
+    world: Vec<Vec3>,
+}
+
+impl ViewPlanner {
+    /// Validates `config`.
+    pub fn new(config: ViewPlannerConfig) -> Result<Self> {
+        let c = &config;
+        let pos = |name: &'static str, v: f64| if v.is_finite() && v > 0.0 { Ok(()) } else { Err(Error::invalid(name, format!("must be finite and > 0, got {v}"))) };
+        pos("d_view", c.d_view)?;
+        pos("reach_threshold", c.reach_threshold)?;
+        if !(0.0..1.0).contains(&c.gamma_h) {
+            return Err(Error::invalid("gamma_h", format!("must be in [0, 1), got {}", c.gamma_h)));
+        }
+        if !(0.0..=1.0).contains(&c.gamma_v) {
+            return Err(Error::invalid("gamma_v", format!("must be in [0, 1], got {}", c.gamma_v)));
+        }
+        for (name, v) in [("fov_h", c.fov_h), ("fov_v", c.fov_v)] {
+            if !(v > 0.0 && v < std::f64::consts::PI) {
+                return Err(Error::invalid(name, format!("must be in (0, π) rad, got {v}")));
+            }
+        }
+        if c.horizon == 0 {
+            return Err(Error::invalid("horizon", "must be at least 1"));
+        }
+        Ok(Self { config, current: None, world: Vec::new() })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ViewPlannerConfig {
+        &self.config
+    }
+
+    /// The current reference, if any.
+    pub fn current(&self) -> Option<ViewPose> {
+        self.current
+    }
+
+    /// Forgets the current reference.
+    pub fn reset(&mut self) {
+        self.current = None;
+    }
+
+    fn load(&mut self, points_body: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<()> {
+        if stride != 2 && stride != 3 || points_body.len() % stride != 0 {
+            return Err(Error::invalid("points", format!("expected rows of 2 or 3 coordinates, got {} values with stride {stride}", points_body.len())));
+        }
+        if points_body.iter().chain(position.iter()).any(|v| !v.is_finite()) || !yaw.is_finite() {
+            return Err(Error::invalid("points", "points, position and yaw must be finite"));
+        }
+        let r = rot_z(yaw);
+        self.world.clear();
+        for c in points_body.chunks_exact(stride) {
+            let z = if stride == 3 { c[2] } else { 0.0 };
+            let w = crate::math::mat_vec(&r, &[c[0], c[1], z]);
+            self.world.push([w[0] + position[0], w[1] + position[1], w[2] + position[2]]);
+        }
+        Ok(())
+    }
+
+    /// One step of Eq. (flip) from `from` against the loaded world points; `None` without points
+    /// (or with the nearest point exactly at `from`).
+    fn step(&self, from: &Vec3) -> Option<ViewPose> {
+        let c = &self.config;
+        let planar_dist = |p: &Vec3| ((p[0] - from[0]).powi(2) + (p[1] - from[1]).powi(2)).sqrt();
+        let nn = self.world.iter().min_by(|a, b| planar_dist(a).total_cmp(&planar_dist(b)))?;
+        let d = [nn[0] - from[0], nn[1] - from[1], 0.0];
+        let dist = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        if dist == 0.0 {
+            return None;
+        }
+        let nx = [d[0] / dist, d[1] / dist, 0.0];
+        let ny = cross(&[0.0, 0.0, 1.0], &nx);
+        let nz = cross(&nx, &ny);
+        let d_insp = dist - c.d_view;
+        let d_hov = 2.0 * (c.fov_h / 2.0).tan() * dist * (1.0 - c.gamma_h);
+        let d_vov = 2.0 * (c.fov_v / 2.0).tan() * dist * (1.0 - c.gamma_v);
+        let mut p = *from;
+        for k in 0..3 {
+            p[k] += nx[k] * d_insp + ny[k] * d_hov + nz[k] * d_vov;
+        }
+        Some(ViewPose { position: p, yaw: nx[1].atan2(nx[0]) })
+    }
+
+    /// Plans one reference from body-frame `points` seen at the estimated pose
+    /// (`position`, `yaw`), without touching the held reference.
+    pub fn plan(&mut self, points: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<Option<ViewPose>> {
+        self.load(points, stride, position, yaw)?;
+        Ok(self.step(position))
+    }
+
+    /// The predicted inspection path: Eq. (flip) applied `horizon` times from the estimate.
+    pub fn predict_path(&mut self, points: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<Vec<ViewPose>> {
+        self.load(points, stride, position, yaw)?;
+        let mut path = Vec::with_capacity(self.config.horizon);
+        let mut from = *position;
+        for _ in 0..self.config.horizon {
+            match self.step(&from) {
+                Some(v) => {
+                    from = v.position;
+                    path.push(v);
+                }
+                None => break,
+            }
+        }
+        Ok(path)
+    }
+
+    /// The reference to track now: the held one until the estimate comes within
+    /// `reach_threshold` of it, then a newly planned one.
+    pub fn update(&mut self, points: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<Option<ViewPose>> {
+        let reached = match self.current {
+            None => true,
+            Some(v) => ((v.position[0] - position[0]).powi(2) + (v.position[1] - position[1]).powi(2)).sqrt() < self.config.reach_threshold,
+        };
+        if reached {
+            if let Some(v) = self.plan(points, stride, position, yaw)? {
+                self.current = Some(v);
+            }
+        }
+        Ok(self.current)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn wall_right() -> Vec<f64> {
+        // a 40 m wall 2 m to the robot's right (y = −2), points every 5 cm
+        (-400..=400).flat_map(|k| [k as f64 * 0.05, -2.0]).collect()
+    }
+
+    #[test]
+    fn flip_step_matches_the_equation() {
+        let mut p = ViewPlanner::new(ViewPlannerConfig::default()).unwrap();
+        let v = p.plan(&wall_right(), 2, &[0.0; 3], 0.0).unwrap().unwrap();
+        // p_nn = (0, −2): ν_x = (0, −1), ν_y = ẑ × ν_x = (1, 0); d_insp = 0.5
+        let d_hov = 2.0 * (69.4_f64.to_radians() / 2.0).tan() * 2.0 * 0.5;
+        assert!((v.position[0] - d_hov).abs() < 1e-12);
+        assert!((v.position[1] - (-0.5)).abs() < 1e-12);
+        assert!((v.yaw + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn planner_uses_the_estimated_pose() {
+        let mut p = ViewPlanner::new(ViewPlannerConfig::default()).unwrap();
+        let truth = p.plan(&wall_right(), 2, &[0.0; 3], 0.0).unwrap().unwrap();
+        let jumped = p.plan(&wall_right(), 2, &[120.0, 0.0, 0.0], 0.0).unwrap().unwrap();
+        assert!((jumped.position[0] - truth.position[0] - 120.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn reference_is_held_until_reached() {
+        let mut p = ViewPlanner::new(ViewPlannerConfig::default()).unwrap();
+        let first = p.update(&wall_right(), 2, &[0.0; 3], 0.0).unwrap().unwrap();
+        let held = p.update(&wall_right(), 2, &[0.2, 0.0, 0.0], 0.0).unwrap().unwrap();
+        assert_eq!(first, held);
+        let near = [first.position[0] - 0.1, first.position[1], 0.0];
+        let next = p.update(&wall_right(), 2, &near, 0.0).unwrap().unwrap();
+        assert!(next.position[0] > first.position[0]);
+    }
+
+    #[test]
+    fn predicted_path_advances_along_the_wall() {
+        let mut p = ViewPlanner::new(ViewPlannerConfig::default()).unwrap();
+        let path = p.predict_path(&wall_right(), 2, &[0.0, 0.0, 0.0], 0.0).unwrap();
+        assert_eq!(path.len(), 5);
+        for w in path.windows(2) {
+            assert!(w[1].position[0] > w[0].position[0]);
+            assert!((w[1].position[1] + 0.5).abs() < 0.02, "keeps d_view from the wall (up to the 5 cm point spacing)");
+        }
+    }
+
+    #[test]
+    fn bad_config_and_input_are_errors() {
+        assert!(ViewPlanner::new(ViewPlannerConfig { d_view: 0.0, ..Default::default() }).is_err());
+        assert!(ViewPlanner::new(ViewPlannerConfig { gamma_h: 1.0, ..Default::default() }).is_err());
+        let mut p = ViewPlanner::new(ViewPlannerConfig::default()).unwrap();
+        assert!(p.plan(&[f64::NAN, 0.0], 2, &[0.0; 3], 0.0).is_err());
+        assert_eq!(p.plan(&[], 2, &[0.0; 3], 0.0).unwrap(), None);
+    }
+}
