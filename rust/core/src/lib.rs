@@ -10,5 +10,7 @@
 pub mod error;
 pub mod math;
 pub mod shield;
+pub mod world;
+pub mod sensors;
 
 pub use error::{Error, Result};
