@@ -198,7 +198,7 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         }
     }
     let mut map = StaticMap::new();
-    map.segments = walls_grid.wall_segments(cfg.wall_height);
+    map.segments = walls_grid.wall_segments(cfg.wall_height, |c| c == Cell::Occupied);
     for (rect, height, _) in &furniture {
         map.add_polygon(Polygon::rect(rect[0], rect[1], rect[2], rect[3], *height))?;
     }

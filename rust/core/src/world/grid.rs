@@ -105,12 +105,12 @@ impl OccupancyGrid {
         (j0..=j1).all(|j| (i0..=i1).all(|i| self.get(i as usize, j as usize) == c))
     }
 
-    /// The boundary between occupied and other cells as wall segments of `height` (m):
-    /// every cell edge with an occupied cell on exactly one side (the grid's outside counts
-    /// as not occupied), collinear neighbouring edges merged into one straight run.
-    pub fn wall_segments(&self, height: Real) -> Vec<Segment> {
+    /// The boundary of the solid cells (those for which `solid` holds) as wall segments of
+    /// `height` (m): every cell edge with a solid cell on exactly one side (the grid's outside
+    /// is not solid), collinear neighbouring edges merged into one straight run.
+    pub fn wall_segments(&self, height: Real, solid: impl Fn(Cell) -> bool) -> Vec<Segment> {
         let (w, h) = (self.width, self.height);
-        let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h && self.get(i as usize, j as usize) == Cell::Occupied;
+        let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h && solid(self.get(i as usize, j as usize));
         let r = self.resolution;
         let mut out = Vec::new();
         // horizontal edges on grid line y = j, between rows j-1 and j
@@ -230,7 +230,7 @@ mod tests {
                 g.set(i, j, Cell::Occupied);
             }
         }
-        let segs = g.wall_segments(2.0);
+        let segs = g.wall_segments(2.0, |c| c == Cell::Occupied);
         assert_eq!(segs.len(), 4, "{segs:?}");
         let total: Real = segs.iter().map(|s| s.length()).sum();
         assert!((total - 2.0 * (1.5 + 1.0)).abs() < 1e-12);

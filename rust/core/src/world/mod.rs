@@ -9,6 +9,7 @@ pub mod grid;
 mod map;
 mod moving;
 pub mod preset;
+pub mod rosmap;
 mod scenario;
 pub mod traverse;
 
@@ -16,6 +17,7 @@ pub use geometry::{cross2, norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segm
 pub use map::StaticMap;
 pub use moving::{MovingObstacle, Trajectory};
 pub use preset::{preset, PRESET_NAMES};
+pub use rosmap::{load_ros_map, RosMap, RosMapOptions};
 pub use scenario::Scenario;
 pub use grid::{Cell, OccupancyGrid};
 pub use traverse::{footprint_reachability, Footprint, Reachability};
