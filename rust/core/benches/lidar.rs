@@ -8,7 +8,7 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shieldnav_core::sensors::{Lidar, LidarConfig, Scan};
-use shieldnav_core::world::{preset, Pose2, Segment};
+use shieldnav_core::world::{load_ros_map, preset, Pose2, RosMapOptions, Segment, SegmentIndex};
 
 /// 200 walls: a 20 × 20 m building outline cut into 2 m pieces (40 walls), 40 boxes
 /// (160 walls), seeded.
@@ -71,6 +71,30 @@ fn bench(c: &mut Criterion) {
             black_box(&scan.ranges);
         })
     });
+    // real maps: fetch the walls near the robot from a bucket index, then scan
+    let maps = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps");
+    for (name, yaml) in [("ut_gdc_floor3", "ut_gdc_floor3/3.yaml"), ("willow_garage", "willow_garage/willow-2010-02-18-0.10.yaml")] {
+        let Ok(m) = load_ros_map(maps.join(yaml), &RosMapOptions::default()) else {
+            eprintln!("skipping {name}: {} not found", maps.join(yaml).display());
+            continue;
+        };
+        for max_range in [10.0, 20.0] {
+            let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range, ..LidarConfig::default() }).unwrap();
+            let mut index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).unwrap();
+            let mut near = Vec::new();
+            let start = m.scenario.start;
+            let mut k = 0;
+            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}", m.scenario.map.segments.len()), |b| {
+                b.iter(|| {
+                    k = (k + 1) % 16;
+                    let p = Pose2::new(start.x + 0.05 * k as f64, start.y, 0.3 * k as f64);
+                    index.query_into([p.x, p.y], max_range, &mut near);
+                    lidar.scan_into(&[black_box(&near)], p, 0.0, &mut rng, &mut scan).unwrap();
+                    black_box(&scan.ranges);
+                })
+            });
+        }
+    }
     g.finish();
 }
 

@@ -25,7 +25,7 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::noise::standard_normal;
+use super::noise::NormalPairs;
 use super::ray_segment::ray_segment_distance;
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -162,6 +162,8 @@ pub struct Lidar {
     el_sec: Vec<Real>,
     el_cos: Vec<Real>,
     el_sin: Vec<Real>,
+    /// Walls in range, in the sensor frame: `(distance, a, b, height)`, nearest first.
+    visible: Vec<(Real, [Real; 2], [Real; 2], Real)>,
 }
 
 impl Lidar {
@@ -185,6 +187,7 @@ impl Lidar {
             el_sec: elev.iter().map(|e| 1.0 / e.cos()).collect(),
             el_cos: elev.iter().map(|e| e.cos()).collect(),
             el_sin: elev.iter().map(|e| e.sin()).collect(),
+            visible: Vec::new(),
         })
     }
 
@@ -226,76 +229,100 @@ impl Lidar {
         let (s, co) = sp.yaw.sin_cos();
         let zs = c.mount.z;
         let inv_step = n as Real / std::f64::consts::TAU;
+        let mut visible = std::mem::take(&mut self.visible);
+        visible.clear();
         for slice in walls {
             for seg in slice.iter() {
+                if kch == 1 && zs > seg.height {
+                    continue; // the level ring passes over this wall
+                }
                 let (dxa, dya) = (seg.a[0] - sp.x, seg.a[1] - sp.y);
                 let (dxb, dyb) = (seg.b[0] - sp.x, seg.b[1] - sp.y);
                 let a = [co * dxa + s * dya, -s * dxa + co * dya];
                 let b = [co * dxb + s * dyb, -s * dxb + co * dyb];
-                if seg_origin_distance(a, b) > c.max_range {
-                    continue;
+                let dmin = seg_origin_distance(a, b);
+                if dmin <= c.max_range {
+                    visible.push((dmin, a, b, seg.height));
                 }
-                if kch == 1 && zs > seg.height {
-                    continue; // the level ring passes over this wall
-                }
-                let fa = fast_atan2(a[1], a[0]);
-                let fb = fast_atan2(b[1], b[0]);
-                let cr = cross2(a, b);
-                let (start, span) = if cr > 0.0 {
-                    (fa, (fb - fa).rem_euclid(std::f64::consts::TAU))
-                } else if cr < 0.0 {
-                    (fb, (fa - fb).rem_euclid(std::f64::consts::TAU))
-                } else {
-                    // collinear with the sensor: only the beams at the end points can hit
-                    self.sweep(a, b, seg.height, fa, 0.0, inv_step, zs, &mut out.ranges);
-                    (fb, 0.0)
-                };
-                self.sweep(a, b, seg.height, start, span, inv_step, zs, &mut out.ranges);
             }
         }
+        // nearest first, so that occluded beams of farther walls are skipped by one compare
+        visible.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        for &(dmin, a, b, height) in &visible {
+            let fa = fast_atan2(a[1], a[0]);
+            let fb = fast_atan2(b[1], b[0]);
+            let cr = cross2(a, b);
+            let (start, span) = if cr > 0.0 {
+                (fa, (fb - fa).rem_euclid(std::f64::consts::TAU))
+            } else if cr < 0.0 {
+                (fb, (fa - fb).rem_euclid(std::f64::consts::TAU))
+            } else {
+                // collinear with the sensor: only the beams at the end points can hit
+                self.sweep(a, b, height, fa, 0.0, inv_step, zs, dmin, &mut out.ranges);
+                (fb, 0.0)
+            };
+            self.sweep(a, b, height, start, span, inv_step, zs, dmin, &mut out.ranges);
+        }
+        self.visible = visible;
         self.finish(rng, out);
         Ok(())
     }
 
     /// Visits the beams of the angular interval `[start, start + span]` (with one beam of
-    /// margin each side, for the approximate angles) and keeps exact nearest hits.
+    /// margin each side, for the approximate angles) and keeps exact nearest hits. `dmin` is
+    /// the segment's distance from the sensor: a planar beam already nearer skips the test.
+    ///
+    /// The hit test is division-free (`t = (a×e)/(d×e) ≥ 0` and `s = (a×d)/(d×e) ∈ [0, 1]`
+    /// compared by sign); the one division gives `t` exactly as [`ray_segment_distance`].
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn sweep(&self, a: [Real; 2], b: [Real; 2], height: Real, start: Real, span: Real, inv_step: Real, zs: Real, best: &mut [Real]) {
-        let n = self.config.columns as i64;
+    fn sweep(&self, a: [Real; 2], b: [Real; 2], height: Real, start: Real, span: Real, inv_step: Real, zs: Real, dmin: Real, best: &mut [Real]) {
+        let n = self.config.columns;
         let j0 = (start * inv_step).floor() as i64 - 1;
         let j1 = ((start + span) * inv_step).ceil() as i64 + 1;
+        let count = ((j1 - j0 + 1) as usize).min(n);
         let e = [b[0] - a[0], b[1] - a[1]];
         let ae = cross2(a, e);
         let planar = self.config.channels == 1;
-        for j in j0..=j1 {
-            let i = j.rem_euclid(n) as usize;
-            let d = [self.az_cos[i], self.az_sin[i]];
-            let den = cross2(d, e);
-            let t = if den != 0.0 {
-                let t = ae / den;
-                let sp = cross2(a, d) / den;
-                if !(t >= 0.0 && (0.0..=1.0).contains(&sp)) {
+        let mut i = j0.rem_euclid(n as i64) as usize;
+        for _ in 0..count {
+            let col = i;
+            i += 1;
+            if i == n {
+                i = 0;
+            }
+            if planar && best[col] <= dmin {
+                continue;
+            }
+            let (dc, ds) = (self.az_cos[col], self.az_sin[col]);
+            let den = dc * e[1] - ds * e[0];
+            let sn = a[0] * ds - a[1] * dc;
+            let t = if den > 0.0 {
+                if !(ae >= 0.0 && sn >= 0.0 && sn <= den) {
                     continue;
                 }
-                t
+                ae / den
+            } else if den < 0.0 {
+                if !(ae <= 0.0 && sn <= 0.0 && sn >= den) {
+                    continue;
+                }
+                ae / den
             } else {
-                match ray_segment_distance([0.0, 0.0], d, a, b) {
+                match ray_segment_distance([0.0, 0.0], [dc, ds], a, b) {
                     Some(t) => t,
                     None => continue,
                 }
             };
             if planar {
-                if t < best[i] {
-                    best[i] = t;
+                if t < best[col] {
+                    best[col] = t;
                 }
             } else {
-                let cols = n as usize;
                 for k in 0..self.el_tan.len() {
                     let z = zs + t * self.el_tan[k];
                     if z >= 0.0 && z <= height {
                         let r = t * self.el_sec[k];
-                        let cell = &mut best[k * cols + i];
+                        let cell = &mut best[k * n + col];
                         if r < *cell {
                             *cell = r;
                         }
@@ -312,6 +339,7 @@ impl Lidar {
         let (ms, mc) = c.mount.yaw.sin_cos();
         out.points.clear();
         out.points.reserve(out.ranges.len());
+        let mut normal = NormalPairs::default();
         for k in 0..c.channels {
             for i in 0..n {
                 let r = &mut out.ranges[k * n + i];
@@ -319,7 +347,7 @@ impl Lidar {
                     *r = Real::INFINITY;
                 } else {
                     if c.range_noise_std > 0.0 {
-                        *r += c.range_noise_std * standard_normal(rng);
+                        *r += c.range_noise_std * normal.next(rng);
                         if *r < c.min_range || *r > c.max_range {
                             *r = Real::INFINITY;
                         }

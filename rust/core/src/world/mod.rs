@@ -6,6 +6,7 @@
 pub mod generate;
 mod geometry;
 pub mod grid;
+mod index;
 mod map;
 mod moving;
 pub mod preset;
@@ -14,6 +15,7 @@ mod scenario;
 pub mod traverse;
 
 pub use geometry::{cross2, norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
+pub use index::SegmentIndex;
 pub use map::StaticMap;
 pub use moving::{MovingObstacle, Trajectory};
 pub use preset::{preset, PRESET_NAMES};
