@@ -25,12 +25,37 @@ pub enum Error {
     /// A numerical solver failed for a reason other than infeasibility.
     #[error("solver failure: {0}")]
     Solver(String),
+    /// A scenario preset name that does not exist.
+    #[error("unknown preset `{name}`; known presets: {known}")]
+    UnknownPreset {
+        /// The name asked for.
+        name: String,
+        /// The known names, comma-separated.
+        known: String,
+    },
+    /// A map, image or scenario file that cannot be read or is malformed.
+    #[error("{path}: {location}: {reason}")]
+    MapFile {
+        /// The file at fault.
+        path: String,
+        /// Where in it: `line 3`, `field resolution`, `header`, ...
+        location: String,
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 impl Error {
     /// Shorthand for [`Error::InvalidArgument`].
     pub fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
         Error::InvalidArgument { name, reason: reason.into() }
+    }
+}
+
+impl Error {
+    /// Shorthand for [`Error::MapFile`].
+    pub fn map_file(path: impl AsRef<std::path::Path>, location: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::MapFile { path: path.as_ref().display().to_string(), location: location.into(), reason: reason.into() }
     }
 }
 

@@ -12,5 +12,7 @@ pub mod error;
 pub mod math;
 pub mod planner;
 pub mod shield;
+pub mod world;
+pub mod sensors;
 
 pub use error::{Error, Result};

@@ -1,0 +1,102 @@
+//! LIDAR scan cost: planar 1024 columns in a 200-wall world, 32 × 1024 3D, and a preset.
+//!
+//! `cargo bench -p shieldnav-core --bench lidar`
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use shieldnav_core::sensors::{Lidar, LidarConfig, Scan};
+use shieldnav_core::world::{load_ros_map, preset, Pose2, RosMapOptions, Segment, SegmentIndex};
+
+/// 200 walls: a 20 × 20 m building outline cut into 2 m pieces (40 walls), 40 boxes
+/// (160 walls), seeded.
+fn world_200() -> Vec<Segment> {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut w = Vec::new();
+    for k in 0..10 {
+        let (a, b) = (-10.0 + 2.0 * k as f64, -8.0 + 2.0 * k as f64);
+        w.push(Segment::new([a, -10.0], [b, -10.0], 2.5));
+        w.push(Segment::new([a, 10.0], [b, 10.0], 2.5));
+        w.push(Segment::new([-10.0, a], [-10.0, b], 2.5));
+        w.push(Segment::new([10.0, a], [10.0, b], 2.5));
+    }
+    while w.len() < 200 {
+        let (cx, cy) = (rng.random_range(-9.0..9.0), rng.random_range(-9.0..9.0));
+        if f64::hypot(cx, cy) < 1.5 {
+            continue;
+        }
+        let (hx, hy) = (rng.random_range(0.1..0.6), rng.random_range(0.1..0.6));
+        let v = [[cx - hx, cy - hy], [cx + hx, cy - hy], [cx + hx, cy + hy], [cx - hx, cy + hy]];
+        for i in 0..4 {
+            w.push(Segment::new(v[i], v[(i + 1) % 4], 1.5));
+        }
+    }
+    w
+}
+
+fn bench(c: &mut Criterion) {
+    let walls = world_200();
+    assert_eq!(walls.len(), 200);
+    let poses: Vec<Pose2> = (0..16).map(|k| Pose2::new(0.1 * k as f64 - 0.8, 0.05 * k as f64 - 0.4, 0.4 * k as f64)).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let mut scan = Scan::default();
+    let mut g = c.benchmark_group("lidar");
+    for (name, cfg) in [
+        ("planar_1024_world200", LidarConfig { range_noise_std: 0.0, ..LidarConfig::default() }),
+        ("planar_1024_world200_noise", LidarConfig::default()),
+        ("3d_32x1024_world200", LidarConfig { channels: 32, range_noise_std: 0.0, ..LidarConfig::default() }),
+    ] {
+        let mut lidar = Lidar::new(cfg).unwrap();
+        g.throughput(Throughput::Elements((cfg.channels * cfg.columns) as u64));
+        let mut k = 0;
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                k = (k + 1) % poses.len();
+                lidar.scan_into(&[black_box(&walls)], poses[k], 0.0, &mut rng, &mut scan).unwrap();
+                black_box(&scan.ranges);
+            })
+        });
+    }
+    let s = preset("odometry_jump").unwrap();
+    let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, ..LidarConfig::default() }).unwrap();
+    g.throughput(Throughput::Elements(1024));
+    let mut k = 0;
+    g.bench_function(format!("planar_1024_odometry_jump_{}walls", s.map.segments.len()), |b| {
+        b.iter(|| {
+            k = (k + 1) % 64;
+            let p = Pose2::new(2.0 + 2.0 * k as f64, 0.1, 0.1 * k as f64);
+            lidar.scan_into(&[black_box(&s.map.segments)], p, 0.0, &mut rng, &mut scan).unwrap();
+            black_box(&scan.ranges);
+        })
+    });
+    // real maps: fetch the walls near the robot from a bucket index, then scan
+    let maps = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps");
+    for (name, yaml) in [("ut_gdc_floor3", "ut_gdc_floor3/3.yaml"), ("willow_garage", "willow_garage/willow-2010-02-18-0.10.yaml")] {
+        let Ok(m) = load_ros_map(maps.join(yaml), &RosMapOptions::default()) else {
+            eprintln!("skipping {name}: {} not found", maps.join(yaml).display());
+            continue;
+        };
+        for max_range in [10.0, 20.0] {
+            let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range, ..LidarConfig::default() }).unwrap();
+            let mut index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).unwrap();
+            let mut near = Vec::new();
+            let start = m.scenario.start;
+            let mut k = 0;
+            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}", m.scenario.map.segments.len()), |b| {
+                b.iter(|| {
+                    k = (k + 1) % 16;
+                    let p = Pose2::new(start.x + 0.05 * k as f64, start.y, 0.3 * k as f64);
+                    index.query_into([p.x, p.y], max_range, &mut near);
+                    lidar.scan_into(&[black_box(&near)], p, 0.0, &mut rng, &mut scan).unwrap();
+                    black_box(&scan.ranges);
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

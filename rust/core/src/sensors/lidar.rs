@@ -1,0 +1,479 @@
+//! An exact planar / 3D LIDAR by polar sweep, configurable like an Ouster OS0.
+//!
+//! For each wall in range the sweep finds the beams inside the wall's angular interval (seen
+//! from the sensor) and gives each the exact `f64` ray–segment distance; each beam keeps its
+//! nearest hit. No BVH and no `f32`: ranges equal a brute-force `f64` ray cast to rounding
+//! (≪ 1e-6 m), grazing beams down a corridor included.
+//!
+//! Frames: column `i` looks at azimuth `2π·i/columns`, counter-clockwise from the sensor's
+//! `+x`; channel `k` at elevation `lo + k·(hi − lo)/(channels − 1)` (channel 0 lowest; a single
+//! channel looks level). Walls are vertical, from the floor (`z = 0`) to their height; a beam
+//! that passes over a wall or hits nothing gives no return. Floor and ceiling are not modelled.
+//!
+//! ```
+//! use shieldnav_core::sensors::{Lidar, LidarConfig, Scan};
+//! use shieldnav_core::world::{Pose2, Segment};
+//! use rand::SeedableRng;
+//! let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, ..LidarConfig::default() }).unwrap();
+//! let wall = [Segment::new([2.0, -5.0], [2.0, 5.0], 2.5)];
+//! let mut scan = Scan::default();
+//! let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+//! lidar.scan_into(&[&wall], Pose2::default(), 0.0, &mut rng, &mut scan).unwrap();
+//! assert!((scan.ranges[0] - 2.0).abs() < 1e-12); // column 0 looks along +x
+//! ```
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use super::noise::NormalPairs;
+use super::ray_segment::ray_segment_distance;
+use crate::error::{Error, Result};
+use crate::math::Real;
+use crate::world::{cross2, Pose2, Segment};
+
+/// Where the sensor sits on the robot: body-frame position (m; `z` is the height above the
+/// floor) and yaw (rad).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LidarMount {
+    /// Forward offset (m).
+    pub x: Real,
+    /// Left offset (m).
+    pub y: Real,
+    /// Height above the floor (m).
+    pub z: Real,
+    /// Yaw relative to the body (rad).
+    pub yaw: Real,
+}
+
+impl Default for LidarMount {
+    fn default() -> Self {
+        Self { x: 0.0, y: 0.0, z: 0.5, yaw: 0.0 }
+    }
+}
+
+/// LIDAR parameters. The default is a planar 1024-column ring at 10 Hz, range 0.1–20 m,
+/// 1 cm range noise, no dropout.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LidarConfig {
+    /// 1 for a planar ring, else 16..=128.
+    pub channels: usize,
+    /// 512, 1024 or 2048 beams per revolution.
+    pub columns: usize,
+    /// Lowest and highest elevation (rad) for `channels > 1`; OS0: ±45°.
+    pub vertical_fov: (Real, Real),
+    /// Returns nearer than this (m) are dropped (and occlude what is behind).
+    pub min_range: Real,
+    /// Returns farther than this (m) are dropped.
+    pub max_range: Real,
+    /// Standard deviation of additive Gaussian range noise (m).
+    pub range_noise_std: Real,
+    /// Probability that a return is dropped, in `[0, 1)`.
+    pub dropout: Real,
+    /// Revolutions per second (10–20 Hz).
+    pub rate_hz: Real,
+    /// Mounting pose on the body.
+    pub mount: LidarMount,
+}
+
+impl Default for LidarConfig {
+    fn default() -> Self {
+        Self {
+            channels: 1,
+            columns: 1024,
+            vertical_fov: (-std::f64::consts::FRAC_PI_4, std::f64::consts::FRAC_PI_4),
+            min_range: 0.1,
+            max_range: 20.0,
+            range_noise_std: 0.01,
+            dropout: 0.0,
+            rate_hz: 10.0,
+            mount: LidarMount::default(),
+        }
+    }
+}
+
+impl LidarConfig {
+    /// Checks every field; the error names it.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.channels == 1 || (16..=128).contains(&self.channels)) {
+            return Err(Error::invalid("channels", format!("must be 1 or in 16..=128, got {}", self.channels)));
+        }
+        if ![512, 1024, 2048].contains(&self.columns) {
+            return Err(Error::invalid("columns", format!("must be 512, 1024 or 2048, got {}", self.columns)));
+        }
+        let (lo, hi) = self.vertical_fov;
+        let half = std::f64::consts::FRAC_PI_2;
+        if !(lo.is_finite() && hi.is_finite() && lo < hi && lo > -half && hi < half) {
+            return Err(Error::invalid("vertical_fov", format!("needs -π/2 < low < high < π/2, got ({lo}, {hi})")));
+        }
+        if !(self.min_range.is_finite() && self.min_range >= 0.0) {
+            return Err(Error::invalid("min_range", format!("must be finite and >= 0, got {}", self.min_range)));
+        }
+        if !(self.max_range.is_finite() && self.max_range > self.min_range) {
+            return Err(Error::invalid("max_range", format!("must be finite and > min_range, got {}", self.max_range)));
+        }
+        if !(self.range_noise_std.is_finite() && self.range_noise_std >= 0.0) {
+            return Err(Error::invalid("range_noise_std", format!("must be finite and >= 0, got {}", self.range_noise_std)));
+        }
+        if !(0.0..1.0).contains(&self.dropout) {
+            return Err(Error::invalid("dropout", format!("must be in [0, 1), got {}", self.dropout)));
+        }
+        if !(10.0..=20.0).contains(&self.rate_hz) {
+            return Err(Error::invalid("rate_hz", format!("must be in [10, 20] Hz, got {}", self.rate_hz)));
+        }
+        let m = self.mount;
+        if ![m.x, m.y, m.z, m.yaw].iter().all(|v| v.is_finite()) || m.z < 0.0 {
+            return Err(Error::invalid("mount", format!("must be finite with z >= 0, got {m:?}")));
+        }
+        Ok(())
+    }
+}
+
+/// One revolution's returns.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Scan {
+    /// Channel count.
+    pub channels: usize,
+    /// Column count.
+    pub columns: usize,
+    /// Range along each beam (m), `ranges[k * columns + i]`; `+inf` where there is no return.
+    pub ranges: Vec<Real>,
+    /// Body-frame points `[x, y, z]` (m), same order; NaN where there is no return.
+    pub points: Vec<[Real; 3]>,
+    /// World time of the scan (s).
+    pub stamp: Real,
+    /// The true sensor pose in the world when scanned (planar part).
+    pub sensor_pose: Pose2,
+}
+
+impl Scan {
+    /// The valid returns only, in body frame.
+    pub fn valid_points(&self) -> impl Iterator<Item = &[Real; 3]> + '_ {
+        self.points.iter().filter(|p| !p[0].is_nan())
+    }
+}
+
+/// The LIDAR: configuration plus precomputed beam tables and scratch space.
+#[derive(Debug, Clone)]
+pub struct Lidar {
+    config: LidarConfig,
+    az_cos: Vec<Real>,
+    az_sin: Vec<Real>,
+    el_tan: Vec<Real>,
+    el_sec: Vec<Real>,
+    el_cos: Vec<Real>,
+    el_sin: Vec<Real>,
+    /// Walls in range, in the sensor frame: `(distance, a, b, height)`, nearest first.
+    visible: Vec<(Real, [Real; 2], [Real; 2], Real)>,
+}
+
+impl Lidar {
+    /// Builds the beam tables after validating `config`.
+    pub fn new(config: LidarConfig) -> Result<Self> {
+        config.validate()?;
+        let n = config.columns;
+        let step = std::f64::consts::TAU / n as Real;
+        let (az_sin, az_cos) = (0..n).map(|i| (i as Real * step).sin_cos()).unzip();
+        let elev: Vec<Real> = if config.channels == 1 {
+            vec![0.0]
+        } else {
+            let (lo, hi) = config.vertical_fov;
+            (0..config.channels).map(|k| lo + k as Real * (hi - lo) / (config.channels - 1) as Real).collect()
+        };
+        Ok(Self {
+            config,
+            az_cos,
+            az_sin,
+            el_tan: elev.iter().map(|e| e.tan()).collect(),
+            el_sec: elev.iter().map(|e| 1.0 / e.cos()).collect(),
+            el_cos: elev.iter().map(|e| e.cos()).collect(),
+            el_sin: elev.iter().map(|e| e.sin()).collect(),
+            visible: Vec::new(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &LidarConfig {
+        &self.config
+    }
+
+    /// Seconds between scans.
+    pub fn period(&self) -> Real {
+        1.0 / self.config.rate_hz
+    }
+
+    /// The sensor's planar pose in the world for a robot at `body`.
+    pub fn sensor_pose(&self, body: Pose2) -> Pose2 {
+        let m = self.config.mount;
+        body.compose(&Pose2::new(m.x, m.y, m.yaw))
+    }
+
+    /// Unit direction of column `i`, channel `k` in the sensor frame.
+    pub fn beam_direction(&self, k: usize, i: usize) -> [Real; 3] {
+        [self.el_cos[k] * self.az_cos[i], self.el_cos[k] * self.az_sin[i], self.el_sin[k]]
+    }
+
+    /// Scans `walls` (each slice in the world frame) from a robot whose true pose is `body`,
+    /// at time `stamp`; noise and dropout are drawn from `rng`. Writes into `out`, reusing its
+    /// buffers.
+    pub fn scan_into<R: Rng + ?Sized>(&mut self, walls: &[&[Segment]], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
+        body.validate("pose")?;
+        let c = self.config;
+        let (n, kch) = (c.columns, c.channels);
+        out.channels = kch;
+        out.columns = n;
+        out.stamp = stamp;
+        out.ranges.clear();
+        out.ranges.resize(n * kch, Real::INFINITY);
+        let sp = self.sensor_pose(body);
+        out.sensor_pose = sp;
+        let (s, co) = sp.yaw.sin_cos();
+        let zs = c.mount.z;
+        let inv_step = n as Real / std::f64::consts::TAU;
+        let mut visible = std::mem::take(&mut self.visible);
+        visible.clear();
+        for slice in walls {
+            for seg in slice.iter() {
+                if kch == 1 && zs > seg.height {
+                    continue; // the level ring passes over this wall
+                }
+                let (dxa, dya) = (seg.a[0] - sp.x, seg.a[1] - sp.y);
+                let (dxb, dyb) = (seg.b[0] - sp.x, seg.b[1] - sp.y);
+                let a = [co * dxa + s * dya, -s * dxa + co * dya];
+                let b = [co * dxb + s * dyb, -s * dxb + co * dyb];
+                let dmin = seg_origin_distance(a, b);
+                if dmin <= c.max_range {
+                    visible.push((dmin, a, b, seg.height));
+                }
+            }
+        }
+        // nearest first, so that occluded beams of farther walls are skipped by one compare
+        visible.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        for &(dmin, a, b, height) in &visible {
+            let fa = fast_atan2(a[1], a[0]);
+            let fb = fast_atan2(b[1], b[0]);
+            let cr = cross2(a, b);
+            let (start, span) = if cr > 0.0 {
+                (fa, (fb - fa).rem_euclid(std::f64::consts::TAU))
+            } else if cr < 0.0 {
+                (fb, (fa - fb).rem_euclid(std::f64::consts::TAU))
+            } else {
+                // collinear with the sensor: only the beams at the end points can hit
+                self.sweep(a, b, height, fa, 0.0, inv_step, zs, dmin, &mut out.ranges);
+                (fb, 0.0)
+            };
+            self.sweep(a, b, height, start, span, inv_step, zs, dmin, &mut out.ranges);
+        }
+        self.visible = visible;
+        self.finish(rng, out);
+        Ok(())
+    }
+
+    /// Visits the beams of the angular interval `[start, start + span]` (with one beam of
+    /// margin each side, for the approximate angles) and keeps exact nearest hits. `dmin` is
+    /// the segment's distance from the sensor: a planar beam already nearer skips the test.
+    ///
+    /// The hit test is division-free (`t = (a×e)/(d×e) ≥ 0` and `s = (a×d)/(d×e) ∈ [0, 1]`
+    /// compared by sign); the one division gives `t` exactly as [`ray_segment_distance`].
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn sweep(&self, a: [Real; 2], b: [Real; 2], height: Real, start: Real, span: Real, inv_step: Real, zs: Real, dmin: Real, best: &mut [Real]) {
+        let n = self.config.columns;
+        let j0 = (start * inv_step).floor() as i64 - 1;
+        let j1 = ((start + span) * inv_step).ceil() as i64 + 1;
+        let count = ((j1 - j0 + 1) as usize).min(n);
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let ae = cross2(a, e);
+        let planar = self.config.channels == 1;
+        let mut i = j0.rem_euclid(n as i64) as usize;
+        for _ in 0..count {
+            let col = i;
+            i += 1;
+            if i == n {
+                i = 0;
+            }
+            if planar && best[col] <= dmin {
+                continue;
+            }
+            let (dc, ds) = (self.az_cos[col], self.az_sin[col]);
+            let den = dc * e[1] - ds * e[0];
+            let sn = a[0] * ds - a[1] * dc;
+            let t = if den > 0.0 {
+                if !(ae >= 0.0 && sn >= 0.0 && sn <= den) {
+                    continue;
+                }
+                ae / den
+            } else if den < 0.0 {
+                if !(ae <= 0.0 && sn <= 0.0 && sn >= den) {
+                    continue;
+                }
+                ae / den
+            } else {
+                match ray_segment_distance([0.0, 0.0], [dc, ds], a, b) {
+                    Some(t) => t,
+                    None => continue,
+                }
+            };
+            if planar {
+                if t < best[col] {
+                    best[col] = t;
+                }
+            } else {
+                for k in 0..self.el_tan.len() {
+                    let z = zs + t * self.el_tan[k];
+                    if z >= 0.0 && z <= height {
+                        let r = t * self.el_sec[k];
+                        let cell = &mut best[k * n + col];
+                        if r < *cell {
+                            *cell = r;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Applies range limits, noise and dropout, and fills the body-frame points.
+    fn finish<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut Scan) {
+        let c = &self.config;
+        let n = c.columns;
+        let (ms, mc) = c.mount.yaw.sin_cos();
+        out.points.clear();
+        out.points.reserve(out.ranges.len());
+        let mut normal = NormalPairs::default();
+        for k in 0..c.channels {
+            for i in 0..n {
+                let r = &mut out.ranges[k * n + i];
+                if *r < c.min_range || *r > c.max_range {
+                    *r = Real::INFINITY;
+                } else {
+                    if c.range_noise_std > 0.0 {
+                        *r += c.range_noise_std * normal.next(rng);
+                        if *r < c.min_range || *r > c.max_range {
+                            *r = Real::INFINITY;
+                        }
+                    }
+                    if c.dropout > 0.0 && rng.random::<Real>() < c.dropout {
+                        *r = Real::INFINITY;
+                    }
+                }
+                if r.is_finite() {
+                    let h = *r * self.el_cos[k];
+                    let (xs, ys) = (h * self.az_cos[i], h * self.az_sin[i]);
+                    out.points.push([c.mount.x + mc * xs - ms * ys, c.mount.y + ms * xs + mc * ys, c.mount.z + *r * self.el_sin[k]]);
+                } else {
+                    out.points.push([Real::NAN; 3]);
+                }
+            }
+        }
+    }
+}
+
+/// Distance from the origin to the segment `a b`.
+#[inline]
+fn seg_origin_distance(a: [Real; 2], b: [Real; 2]) -> Real {
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let l2 = e[0] * e[0] + e[1] * e[1];
+    let t = if l2 > 0.0 { (-(a[0] * e[0] + a[1] * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (a[0] + t * e[0]).hypot(a[1] + t * e[1])
+}
+
+/// `atan2` to about 1e-5 rad: only used to pick the beams to test, with a beam of margin
+/// (≥ 3e-3 rad at 2048 columns); the ranges themselves are exact.
+#[inline]
+fn fast_atan2(y: Real, x: Real) -> Real {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let (ax, ay) = (x.abs(), y.abs());
+    let (mn, mx) = if ax < ay { (ax, ay) } else { (ay, ax) };
+    if mx == 0.0 {
+        return 0.0;
+    }
+    let q = mn / mx;
+    let s = q * q;
+    let mut r = (((-0.013_480_470 * s + 0.057_477_314) * s - 0.121_239_071) * s + 0.195_635_925) * s - 0.332_994_597;
+    r = (r * s + 0.999_995_630) * q;
+    if ay > ax {
+        r = FRAC_PI_2 - r;
+    }
+    if x < 0.0 {
+        r = PI - r;
+    }
+    if y < 0.0 {
+        -r
+    } else {
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn fast_atan2_is_within_its_bound() {
+        let mut worst: Real = 0.0;
+        for k in 0..100_000 {
+            let a = k as Real * 1e-4 * std::f64::consts::TAU / 10.0 - 3.2;
+            let (y, x) = (a.sin() * 3.7, a.cos() * 3.7);
+            worst = worst.max((fast_atan2(y, x) - y.atan2(x)).abs());
+        }
+        assert!(worst < 2e-5, "worst {worst}");
+    }
+
+    #[test]
+    fn invalid_configs_name_the_field() {
+        for (cfg, field) in [
+            (LidarConfig { channels: 8, ..Default::default() }, "channels"),
+            (LidarConfig { columns: 1000, ..Default::default() }, "columns"),
+            (LidarConfig { max_range: 0.05, ..Default::default() }, "max_range"),
+            (LidarConfig { dropout: 1.0, ..Default::default() }, "dropout"),
+            (LidarConfig { rate_hz: 5.0, ..Default::default() }, "rate_hz"),
+            (LidarConfig { range_noise_std: Real::NAN, ..Default::default() }, "range_noise_std"),
+        ] {
+            let e = Lidar::new(cfg).unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
+        }
+    }
+
+    #[test]
+    fn planar_ring_passes_over_low_walls() {
+        let mut l = Lidar::new(LidarConfig { range_noise_std: 0.0, ..Default::default() }).unwrap();
+        let low = [Segment::new([1.0, -1.0], [1.0, 1.0], 0.3)];
+        let high = [Segment::new([3.0, -1.0], [3.0, 1.0], 2.0)];
+        let mut scan = Scan::default();
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        l.scan_into(&[&low, &high], Pose2::default(), 0.0, &mut rng, &mut scan).unwrap();
+        assert!((scan.ranges[0] - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn mount_offset_moves_points_into_the_body_frame() {
+        let cfg = LidarConfig { range_noise_std: 0.0, mount: LidarMount { x: 0.5, y: 0.0, z: 0.4, yaw: std::f64::consts::PI }, ..Default::default() };
+        let mut l = Lidar::new(cfg).unwrap();
+        let wall = [Segment::new([-2.0, -1.0], [-2.0, 1.0], 2.0)];
+        let mut scan = Scan::default();
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        l.scan_into(&[&wall], Pose2::default(), 0.0, &mut rng, &mut scan).unwrap();
+        // column 0 looks backwards (mount yaw π) from x = 0.5: the wall is 2.5 m away
+        assert!((scan.ranges[0] - 2.5).abs() < 1e-12);
+        let p = scan.points[0];
+        assert!((p[0] + 2.0).abs() < 1e-12 && p[1].abs() < 1e-12 && (p[2] - 0.4).abs() < 1e-15);
+    }
+
+    #[test]
+    fn dropout_and_noise_use_the_given_rng() {
+        let cfg = LidarConfig { dropout: 0.3, range_noise_std: 0.02, ..Default::default() };
+        let mut l = Lidar::new(cfg).unwrap();
+        let wall = [Segment::new([-2.0, -3.0], [-2.0, 3.0], 2.0), Segment::new([2.0, -3.0], [2.0, 3.0], 2.0)];
+        let mut s1 = Scan::default();
+        let mut s2 = Scan::default();
+        l.scan_into(&[&wall], Pose2::default(), 0.0, &mut ChaCha8Rng::seed_from_u64(5), &mut s1).unwrap();
+        l.scan_into(&[&wall], Pose2::default(), 0.0, &mut ChaCha8Rng::seed_from_u64(5), &mut s2).unwrap();
+        assert_eq!(s1.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>(), s2.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>());
+        let hits = s1.ranges.iter().filter(|r| r.is_finite()).count();
+        // the two walls cover 2·2·atan(1.5) of the circle; ~30 % of those returns are dropped
+        let expected = 1024.0 * 4.0 * (1.5f64).atan() / std::f64::consts::TAU * 0.7;
+        assert!((hits as Real - expected).abs() < 0.08 * expected, "{hits} vs {expected}");
+    }
+}

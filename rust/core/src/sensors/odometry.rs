@@ -1,0 +1,205 @@
+//! The pose estimate the planner sees: true motion plus drift and scheduled faults.
+//!
+//! Each step the true body-frame displacement is integrated with multiplicative Gaussian
+//! noise and a yaw bias; scheduled faults then act on the estimate: a position jump (the
+//! paper's Scenario 2, "exceeding 100 m"), a yaw jump, or a freeze (the estimate stops moving).
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use super::noise::standard_normal;
+use crate::error::{Error, Result};
+use crate::math::Real;
+use crate::world::{wrap_angle, Pose2};
+
+/// A scheduled odometry fault.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum OdometryFault {
+    /// At `time` (s) the estimate is shifted by `(dx, dy)` (m, world frame).
+    Jump {
+        /// When (s).
+        time: Real,
+        /// Shift along world x (m).
+        dx: Real,
+        /// Shift along world y (m).
+        dy: Real,
+    },
+    /// At `time` (s) the estimated yaw is rotated by `dyaw` (rad).
+    YawJump {
+        /// When (s).
+        time: Real,
+        /// Rotation (rad).
+        dyaw: Real,
+    },
+    /// From `start` to `end` (s) the estimate does not move.
+    Freeze {
+        /// Start (s).
+        start: Real,
+        /// End (s).
+        end: Real,
+    },
+}
+
+/// Drift parameters and fault schedule. The default is a perfect odometry.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct OdometryConfig {
+    /// Standard deviation of the relative translation error (per metre travelled, unitless).
+    pub translation_noise: Real,
+    /// Standard deviation of the relative yaw error (per radian turned, unitless).
+    pub yaw_noise: Real,
+    /// Constant yaw drift (rad/s).
+    pub yaw_bias: Real,
+    /// Scheduled faults.
+    pub faults: Vec<OdometryFault>,
+}
+
+impl OdometryConfig {
+    /// Checks every field; the error names it.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [("translation_noise", self.translation_noise), ("yaw_noise", self.yaw_noise)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(name, format!("must be finite and >= 0, got {v}")));
+            }
+        }
+        if !self.yaw_bias.is_finite() {
+            return Err(Error::invalid("yaw_bias", format!("must be finite, got {}", self.yaw_bias)));
+        }
+        for f in &self.faults {
+            let ok = match *f {
+                OdometryFault::Jump { time, dx, dy } => time.is_finite() && dx.is_finite() && dy.is_finite(),
+                OdometryFault::YawJump { time, dyaw } => time.is_finite() && dyaw.is_finite(),
+                OdometryFault::Freeze { start, end } => start.is_finite() && end.is_finite() && start < end,
+            };
+            if !ok {
+                return Err(Error::invalid("faults", format!("non-finite or empty interval in {f:?}")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The running odometry estimate.
+#[derive(Debug, Clone)]
+pub struct Odometry {
+    config: OdometryConfig,
+    estimate: Pose2,
+    last_true: Pose2,
+    last_time: Real,
+}
+
+impl Odometry {
+    /// Starts with the estimate equal to the true `start` pose at time `t0` (s).
+    pub fn new(config: OdometryConfig, start: Pose2, t0: Real) -> Result<Self> {
+        config.validate()?;
+        start.validate("start")?;
+        Ok(Self { config, estimate: start, last_true: start, last_time: t0 })
+    }
+
+    /// The current estimate.
+    pub fn estimate(&self) -> Pose2 {
+        self.estimate
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &OdometryConfig {
+        &self.config
+    }
+
+    /// Advances to time `t` (s) given the true pose then; returns the new estimate.
+    pub fn update<R: Rng + ?Sized>(&mut self, t: Real, true_pose: Pose2, rng: &mut R) -> Pose2 {
+        let c = &self.config;
+        let t_prev = self.last_time;
+        let frozen = c.faults.iter().any(|f| matches!(*f, OdometryFault::Freeze { start, end } if t > start && t_prev < end));
+        let d = self.last_true.between(&true_pose);
+        if !frozen {
+            let (mut dx, mut dy, mut dyaw) = (d.x, d.y, d.yaw);
+            if c.translation_noise > 0.0 {
+                dx += c.translation_noise * dx.abs() * standard_normal(rng);
+                dy += c.translation_noise * dy.abs() * standard_normal(rng);
+            }
+            if c.yaw_noise > 0.0 {
+                dyaw += c.yaw_noise * dyaw.abs() * standard_normal(rng);
+            }
+            dyaw += c.yaw_bias * (t - t_prev);
+            self.estimate = self.estimate.compose(&Pose2::new(dx, dy, dyaw));
+        }
+        for f in &c.faults {
+            match *f {
+                OdometryFault::Jump { time, dx, dy } if time > t_prev && time <= t => {
+                    self.estimate.x += dx;
+                    self.estimate.y += dy;
+                }
+                OdometryFault::YawJump { time, dyaw } if time > t_prev && time <= t => {
+                    self.estimate.yaw = wrap_angle(self.estimate.yaw + dyaw);
+                }
+                _ => {}
+            }
+        }
+        self.last_true = true_pose;
+        self.last_time = t;
+        self.estimate
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    fn drive(cfg: OdometryConfig) -> Vec<(Pose2, Pose2)> {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut odo = Odometry::new(cfg, Pose2::default(), 0.0).unwrap();
+        (1..=300)
+            .map(|k| {
+                let t = k as Real * 0.1;
+                let truth = Pose2::new(0.5 * t, 0.0, 0.0);
+                (truth, odo.update(t, truth, &mut rng))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn perfect_odometry_tracks_truth() {
+        for (truth, est) in drive(OdometryConfig::default()) {
+            assert!((truth.x - est.x).abs() < 1e-9 && (truth.y - est.y).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn jump_happens_once_at_its_time() {
+        let cfg = OdometryConfig { faults: vec![OdometryFault::Jump { time: 20.0, dx: 120.0, dy: 0.0 }], ..Default::default() };
+        let run = drive(cfg);
+        let before = run[198]; // t = 19.9
+        let after = run[200]; // t = 20.1
+        assert!((before.1.x - before.0.x).abs() < 1e-9);
+        assert!((after.1.x - after.0.x - 120.0).abs() < 1e-9);
+        assert!((run[299].1.x - run[299].0.x - 120.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn freeze_stops_the_estimate() {
+        let cfg = OdometryConfig { faults: vec![OdometryFault::Freeze { start: 5.0, end: 10.0 }], ..Default::default() };
+        let run = drive(cfg);
+        // estimate at t = 10 equals estimate at t = 5; afterwards it moves again but lags by 2.5 m
+        assert!((run[99].1.x - run[49].1.x).abs() < 1e-12);
+        assert!((run[299].0.x - run[299].1.x - 2.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn noisy_odometry_drifts_but_stays_plausible() {
+        let cfg = OdometryConfig { translation_noise: 0.05, yaw_noise: 0.0, yaw_bias: 0.001, faults: vec![] };
+        let (truth, est) = drive(cfg)[299];
+        let err = (truth.x - est.x).hypot(truth.y - est.y);
+        assert!(err > 1e-4 && err < 2.0, "drift {err}");
+    }
+
+    #[test]
+    fn bad_config_is_an_error() {
+        let cfg = OdometryConfig { translation_noise: -1.0, ..Default::default() };
+        assert!(Odometry::new(cfg, Pose2::default(), 0.0).is_err());
+        let cfg = OdometryConfig { faults: vec![OdometryFault::Freeze { start: 3.0, end: 1.0 }], ..Default::default() };
+        assert!(cfg.validate().is_err());
+    }
+}

@@ -1,0 +1,321 @@
+//! A seeded procedural generator of inspection sites.
+//!
+//! Two kinds: an *office* (a main corridor with perpendicular branches, junction pads, rooms
+//! behind doorways) and a *tunnel* (one long, self-similar corridor with identical side rooms
+//! at a fixed pitch). Corridors are 1.0–3.0 m wide (tunnels 2.0–3.0 m), doorways 0.8–1.4 m,
+//! and misplaced furniture narrows the corridors. Everything is carved into a 5 cm occupancy
+//! grid; walls are its merged cell edges, furniture boxes are polygons of their own height.
+//!
+//! Every site is checked, not assumed, traversable: the footprint search of
+//! [`super::traverse`] must reach every waypoint (corridor ends, junctions, room centres) from
+//! the start. Furniture that blocks a waypoint is removed (last placed first); a room still
+//! unreachable is walled up again.
+//!
+//! ```
+//! use shieldnav_core::world::generate::{generate, GeneratorConfig};
+//! let a = generate(7, &GeneratorConfig::default()).unwrap();
+//! let b = generate(7, &GeneratorConfig::default()).unwrap();
+//! assert_eq!(a.scenario, b.scenario); // same seed, same site
+//! ```
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::geometry::{Point2, Polygon, Pose2};
+use super::grid::{Cell, OccupancyGrid};
+use super::map::StaticMap;
+use super::scenario::Scenario;
+use super::traverse::{footprint_reachability, Footprint};
+use crate::error::{Error, Result};
+use crate::math::Real;
+
+/// How far in from a corridor's closed end its waypoint sits (m): the conservative disc
+/// cover of the footprint search needs about a metre in front of the robot's centre.
+const END_INSET: Real = 1.4;
+
+/// What kind of site to generate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SiteKind {
+    /// Corridors, junctions and rooms.
+    Office,
+    /// A long self-similar corridor with identical side rooms.
+    Tunnel,
+}
+
+/// Generator parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GeneratorConfig {
+    /// Office or tunnel.
+    pub kind: SiteKind,
+    /// The robot footprint every site must admit.
+    pub footprint: Footprint,
+    /// Clearance margin around the footprint (m).
+    pub margin: Real,
+    /// Grid cell (m).
+    pub resolution: Real,
+    /// Wall height (m).
+    pub wall_height: Real,
+    /// How many pieces of furniture to try to place.
+    pub furniture: usize,
+}
+
+impl Default for GeneratorConfig {
+    fn default() -> Self {
+        Self { kind: SiteKind::Office, footprint: Footprint::default(), margin: 0.05, resolution: 0.05, wall_height: 2.5, furniture: 8 }
+    }
+}
+
+/// A generated site: the scenario plus the checked waypoints and the grid it was carved in.
+#[derive(Debug, Clone)]
+pub struct GeneratedSite {
+    /// Map, start and goal.
+    pub scenario: Scenario,
+    /// Places the footprint search reached from the start.
+    pub waypoints: Vec<Point2>,
+    /// The carved grid, furniture included.
+    pub grid: OccupancyGrid,
+}
+
+/// An axis-aligned corridor (grid-frame metres).
+#[derive(Debug, Clone, Copy)]
+struct Corridor {
+    x0: Real,
+    y0: Real,
+    x1: Real,
+    y1: Real,
+}
+
+impl Corridor {
+    fn horizontal(&self) -> bool {
+        self.x1 - self.x0 >= self.y1 - self.y0
+    }
+    fn width(&self) -> Real {
+        (self.x1 - self.x0).min(self.y1 - self.y0)
+    }
+}
+
+struct Room {
+    rect: [Real; 4],
+    door: [Real; 4],
+    centre: Point2,
+}
+
+/// Generates the site of `seed`. Same seed and config, bit-identical site.
+pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
+    if !(cfg.resolution.is_finite() && cfg.resolution > 0.0 && cfg.resolution <= 0.1) {
+        return Err(Error::invalid("resolution", format!("must be in (0, 0.1] m, got {}", cfg.resolution)));
+    }
+    if !(cfg.wall_height.is_finite() && cfg.wall_height > 0.0) {
+        return Err(Error::invalid("wall_height", format!("must be finite and > 0, got {}", cfg.wall_height)));
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let res = cfg.resolution;
+    let (size, corridors, pads) = match cfg.kind {
+        SiteKind::Office => office_layout(&mut rng),
+        SiteKind::Tunnel => tunnel_layout(&mut rng),
+    };
+    let mut grid = OccupancyGrid::new((size[0] / res).round() as usize, (size[1] / res).round() as usize, res, Pose2::default(), Cell::Occupied)?;
+    for c in corridors.iter().chain(pads.iter()) {
+        grid.fill_rect(c.x0, c.y0, c.x1, c.y1, Cell::Free);
+    }
+    let rooms = carve_rooms(&mut rng, &mut grid, &corridors, cfg.kind);
+    let main = corridors[0];
+    let yc = 0.5 * (main.y0 + main.y1);
+    let start = Pose2::new(main.x0 + END_INSET, yc, 0.0);
+    let goal = Pose2::new(main.x1 - END_INSET, yc, 0.0);
+    let mut waypoints = vec![[goal.x, goal.y]];
+    for c in &corridors[1..] {
+        // the branch's far end, END_INSET in from its tip
+        let far = if c.horizontal() { [if c.x0 < main.x0 { c.x0 + END_INSET } else { c.x1 - END_INSET }, 0.5 * (c.y0 + c.y1)] } else if c.y0 < yc { [0.5 * (c.x0 + c.x1), c.y0 + END_INSET] } else { [0.5 * (c.x0 + c.x1), c.y1 - END_INSET] };
+        waypoints.push(far);
+    }
+    // walls come from the grid before furniture; furniture is separate polygons
+    let walls_grid = grid.clone();
+    let mut furniture: Vec<([Real; 4], Real, Vec<(usize, usize)>)> = Vec::new();
+    let corridor_count = corridors.len();
+    for _ in 0..cfg.furniture {
+        let c = corridors[rng.random_range(0..corridor_count)];
+        let w = c.width();
+        let need = cfg.footprint.width + 2.0 * cfg.margin + 3.0 * res + 0.2;
+        let depth_max = (w - need).min(0.8);
+        let depth = rng.random_range(0.2..0.8);
+        let length = rng.random_range(0.4..1.2);
+        let height = rng.random_range(0.5..1.5);
+        let side = rng.random_bool(0.5);
+        if depth > depth_max {
+            continue;
+        }
+        let rect = if c.horizontal() {
+            let x = rng.random_range(c.x0 + 2.0..(c.x1 - 2.0 - length).max(c.x0 + 2.5));
+            if side { [x, c.y1 - depth, x + length, c.y1] } else { [x, c.y0, x + length, c.y0 + depth] }
+        } else {
+            let y = rng.random_range(c.y0 + 2.0..(c.y1 - 2.0 - length).max(c.y0 + 2.5));
+            if side { [c.x1 - depth, y, c.x1, y + length] } else { [c.x0, y, c.x0 + depth, y + length] }
+        };
+        if !grid.rect_is(rect[0], rect[1], rect[2], rect[3], Cell::Free) {
+            continue;
+        }
+        let cells = cells_in(&grid, rect);
+        for &(i, j) in &cells {
+            grid.set(i, j, Cell::Occupied);
+        }
+        furniture.push((rect, height, cells));
+    }
+    let room_points: Vec<Point2> = rooms.iter().map(|r| r.centre).collect();
+    // check, then repair: furniture out (last first), then unreachable rooms walled up
+    let mut open_rooms: Vec<bool> = vec![true; rooms.len()];
+    loop {
+        let reach = footprint_reachability(&grid, cfg.footprint, cfg.margin, start)?;
+        let corridor_ok = waypoints.iter().all(|p| reach.reaches(*p));
+        let rooms_ok = room_points.iter().zip(&open_rooms).all(|(p, open)| !open || reach.reaches(*p));
+        if corridor_ok && rooms_ok {
+            break;
+        }
+        if let Some((_, _, cells)) = furniture.pop() {
+            for (i, j) in cells {
+                grid.set(i, j, Cell::Free);
+            }
+            continue;
+        }
+        if !corridor_ok {
+            return Err(Error::invalid("seed", format!("site {seed}: a corridor waypoint is unreachable even without furniture")));
+        }
+        for (k, r) in rooms.iter().enumerate() {
+            if open_rooms[k] && !reach.reaches(r.centre) {
+                open_rooms[k] = false;
+                grid.fill_rect(r.rect[0], r.rect[1], r.rect[2], r.rect[3], Cell::Occupied);
+                grid.fill_rect(r.door[0], r.door[1], r.door[2], r.door[3], Cell::Occupied);
+            }
+        }
+    }
+    let mut walls_grid = walls_grid;
+    for (k, r) in rooms.iter().enumerate() {
+        if !open_rooms[k] {
+            walls_grid.fill_rect(r.rect[0], r.rect[1], r.rect[2], r.rect[3], Cell::Occupied);
+            walls_grid.fill_rect(r.door[0], r.door[1], r.door[2], r.door[3], Cell::Occupied);
+        } else {
+            waypoints.push(r.centre);
+        }
+    }
+    let mut map = StaticMap::new();
+    map.segments = walls_grid.wall_segments(cfg.wall_height, |c| c == Cell::Occupied);
+    for (rect, height, _) in &furniture {
+        map.add_polygon(Polygon::rect(rect[0], rect[1], rect[2], rect[3], *height))?;
+    }
+    let kind = match cfg.kind {
+        SiteKind::Office => "office",
+        SiteKind::Tunnel => "tunnel",
+    };
+    let mut scenario = Scenario::new(format!("procedural_{kind}_{seed}"), map, start);
+    scenario.goal = Some(goal);
+    Ok(GeneratedSite { scenario, waypoints, grid })
+}
+
+fn cells_in(grid: &OccupancyGrid, r: [Real; 4]) -> Vec<(usize, usize)> {
+    let res = grid.resolution;
+    let (i0, j0) = ((r[0] / res - 0.5).ceil() as usize, (r[1] / res - 0.5).ceil() as usize);
+    let (i1, j1) = ((r[2] / res - 0.5).floor() as usize, (r[3] / res - 0.5).floor() as usize);
+    (j0..=j1).flat_map(|j| (i0..=i1).map(move |i| (i, j))).collect()
+}
+
+/// Main corridor along x through the middle, 2–4 perpendicular branches with junction pads.
+fn office_layout(rng: &mut ChaCha8Rng) -> ([Real; 2], Vec<Corridor>, Vec<Corridor>) {
+    let size = [64.0, 44.0];
+    let yc = 22.0;
+    let len = rng.random_range(30.0..54.0);
+    let w0 = rng.random_range(1.0..3.0);
+    let mut corridors = vec![Corridor { x0: 4.0, y0: yc - 0.5 * w0, x1: 4.0 + len, y1: yc + 0.5 * w0 }];
+    let mut pads = Vec::new();
+    let n_branch = rng.random_range(2..=4);
+    let mut xs: Vec<Real> = Vec::new();
+    for _ in 0..40 {
+        if xs.len() == n_branch {
+            break;
+        }
+        let x = rng.random_range(10.0..(4.0 + len - 4.0));
+        if xs.iter().all(|o| (o - x).abs() >= 8.0) {
+            xs.push(x);
+        }
+    }
+    for x in xs {
+        let wb = rng.random_range(1.0..3.0);
+        let l = rng.random_range(6.0..16.0);
+        let up = rng.random_bool(0.5);
+        let (y0, y1) = if up { (yc, yc + 0.5 * w0 + l) } else { (yc - 0.5 * w0 - l, yc) };
+        corridors.push(Corridor { x0: x - 0.5 * wb, y0, x1: x + 0.5 * wb, y1 });
+        let s = w0.max(wb).max(1.8);
+        pads.push(Corridor { x0: x - 0.5 * s, y0: yc - 0.5 * s, x1: x + 0.5 * s, y1: yc + 0.5 * s });
+    }
+    (size, corridors, pads)
+}
+
+/// One long corridor, 100–180 m, 2–3 m wide.
+fn tunnel_layout(rng: &mut ChaCha8Rng) -> ([Real; 2], Vec<Corridor>, Vec<Corridor>) {
+    let len = rng.random_range(100.0..180.0);
+    let w = rng.random_range(2.0..3.0);
+    let size = [len + 8.0, 16.0];
+    (size, vec![Corridor { x0: 4.0, y0: 8.0 - 0.5 * w, x1: 4.0 + len, y1: 8.0 + 0.5 * w }], Vec::new())
+}
+
+/// Rooms behind doorways in the corridor walls. Tunnels get identical rooms at a fixed pitch
+/// on alternating sides (self-similar); offices get rooms at random places where they fit.
+fn carve_rooms(rng: &mut ChaCha8Rng, grid: &mut OccupancyGrid, corridors: &[Corridor], kind: SiteKind) -> Vec<Room> {
+    let wall = 0.2;
+    let mut rooms = Vec::new();
+    let try_room = |grid: &mut OccupancyGrid, c: &Corridor, along: Real, side: bool, door: Real, rw: Real, rd: Real| {
+        // rectangles in grid metres; `along` is the door centre along the corridor
+        let (rect, door_rect) = if c.horizontal() {
+            if side {
+                ([along - 0.5 * rw, c.y1 + wall, along + 0.5 * rw, c.y1 + wall + rd], [along - 0.5 * door, c.y1 - 0.01, along + 0.5 * door, c.y1 + wall + 0.01])
+            } else {
+                ([along - 0.5 * rw, c.y0 - wall - rd, along + 0.5 * rw, c.y0 - wall], [along - 0.5 * door, c.y0 - wall - 0.01, along + 0.5 * door, c.y0 + 0.01])
+            }
+        } else if side {
+            ([c.x1 + wall, along - 0.5 * rw, c.x1 + wall + rd, along + 0.5 * rw], [c.x1 - 0.01, along - 0.5 * door, c.x1 + wall + 0.01, along + 0.5 * door])
+        } else {
+            ([c.x0 - wall - rd, along - 0.5 * rw, c.x0 - wall, along + 0.5 * rw], [c.x0 - wall - 0.01, along - 0.5 * door, c.x0 + 0.01, along + 0.5 * door])
+        };
+        let keep_out = [rect[0] - wall, rect[1] - wall, rect[2] + wall, rect[3] + wall];
+        if !grid.rect_is(keep_out[0], keep_out[1], keep_out[2], keep_out[3], Cell::Occupied) {
+            return None;
+        }
+        grid.fill_rect(rect[0], rect[1], rect[2], rect[3], Cell::Free);
+        grid.fill_rect(door_rect[0], door_rect[1], door_rect[2], door_rect[3], Cell::Free);
+        Some(Room { rect, door: door_rect, centre: [0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3])] })
+    };
+    match kind {
+        SiteKind::Tunnel => {
+            let c = corridors[0];
+            let pitch = rng.random_range(8.0..14.0);
+            let door = rng.random_range(0.8..1.4);
+            let (rw, rd) = (rng.random_range(3.0..5.0), rng.random_range(2.5..3.5));
+            let mut along = c.x0 + 0.5 * pitch;
+            let mut side = true;
+            while along + 0.5 * rw < c.x1 - 2.0 {
+                if let Some(r) = try_room(grid, &c, along, side, door, rw, rd) {
+                    rooms.push(r);
+                }
+                side = !side;
+                along += pitch;
+            }
+        }
+        SiteKind::Office => {
+            let attempts = rng.random_range(6..12);
+            for _ in 0..attempts {
+                let c = corridors[rng.random_range(0..corridors.len())];
+                let (lo, hi) = if c.horizontal() { (c.x0, c.x1) } else { (c.y0, c.y1) };
+                if hi - lo < 6.0 {
+                    continue;
+                }
+                let along = rng.random_range(lo + 3.0..hi - 3.0);
+                let side = rng.random_bool(0.5);
+                let door = rng.random_range(0.8..1.4);
+                let (rw, rd) = (rng.random_range(3.0..6.0), rng.random_range(3.0..5.0));
+                if let Some(r) = try_room(grid, &c, along, side, door, rw, rd) {
+                    rooms.push(r);
+                }
+            }
+        }
+    }
+    rooms
+}

@@ -1,0 +1,253 @@
+//! Planar primitives of the world: points, poses, wall segments and extruded polygons.
+//!
+//! Everything is in metres and radians, `f64`, in the world frame unless stated. Walls stand on
+//! the floor (`z = 0`) and rise to their `height`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::math::Real;
+
+/// A planar point `[x, y]` (m).
+pub type Point2 = [Real; 2];
+
+/// `a × b` of two planar vectors (the z of the 3D cross product).
+#[inline]
+pub fn cross2(a: Point2, b: Point2) -> Real {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// `a − b`.
+#[inline]
+pub fn sub2(a: Point2, b: Point2) -> Point2 {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+/// Euclidean norm of a planar vector.
+#[inline]
+pub fn norm2(a: Point2) -> Real {
+    a[0].hypot(a[1])
+}
+
+/// A planar pose: position `(x, y)` (m) and heading `yaw` (rad, counter-clockwise from `+x`).
+///
+/// ```
+/// use shieldnav_core::world::Pose2;
+/// let p = Pose2::new(1.0, 2.0, std::f64::consts::FRAC_PI_2);
+/// let w = p.transform_point([1.0, 0.0]);
+/// assert!((w[0] - 1.0).abs() < 1e-12 && (w[1] - 3.0).abs() < 1e-12);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Pose2 {
+    /// Position x (m).
+    pub x: Real,
+    /// Position y (m).
+    pub y: Real,
+    /// Heading (rad).
+    pub yaw: Real,
+}
+
+impl Pose2 {
+    /// A pose from its parts.
+    pub const fn new(x: Real, y: Real, yaw: Real) -> Self {
+        Self { x, y, yaw }
+    }
+
+    /// Maps a point from this pose's frame to the parent frame.
+    #[inline]
+    pub fn transform_point(&self, p: Point2) -> Point2 {
+        let (s, c) = self.yaw.sin_cos();
+        [self.x + c * p[0] - s * p[1], self.y + s * p[0] + c * p[1]]
+    }
+
+    /// Maps a point from the parent frame into this pose's frame.
+    #[inline]
+    pub fn inverse_transform_point(&self, p: Point2) -> Point2 {
+        let (s, c) = self.yaw.sin_cos();
+        let d = [p[0] - self.x, p[1] - self.y];
+        [c * d[0] + s * d[1], -s * d[0] + c * d[1]]
+    }
+
+    /// `self ∘ other`: `other` expressed in this pose's frame, mapped to the parent frame.
+    pub fn compose(&self, other: &Pose2) -> Pose2 {
+        let p = self.transform_point([other.x, other.y]);
+        Pose2::new(p[0], p[1], wrap_angle(self.yaw + other.yaw))
+    }
+
+    /// The pose `d` with `self ∘ d = other`.
+    pub fn between(&self, other: &Pose2) -> Pose2 {
+        let p = self.inverse_transform_point([other.x, other.y]);
+        Pose2::new(p[0], p[1], wrap_angle(other.yaw - self.yaw))
+    }
+
+    /// Checks that every component is finite; `name` is the argument reported on error.
+    pub fn validate(&self, name: &'static str) -> Result<()> {
+        if self.x.is_finite() && self.y.is_finite() && self.yaw.is_finite() {
+            Ok(())
+        } else {
+            Err(Error::invalid(name, format!("pose components must be finite, got {self:?}")))
+        }
+    }
+}
+
+/// Wraps an angle to `(-π, π]`.
+pub fn wrap_angle(a: Real) -> Real {
+    use std::f64::consts::{PI, TAU};
+    let mut r = a % TAU;
+    if r > PI {
+        r -= TAU;
+    } else if r <= -PI {
+        r += TAU;
+    }
+    r
+}
+
+/// A wall: the vertical rectangle over the segment `a → b`, from the floor to `height` (m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Segment {
+    /// First end point (m).
+    pub a: Point2,
+    /// Second end point (m).
+    pub b: Point2,
+    /// Top of the wall above the floor (m).
+    pub height: Real,
+}
+
+impl Segment {
+    /// A wall segment.
+    pub const fn new(a: Point2, b: Point2, height: Real) -> Self {
+        Self { a, b, height }
+    }
+
+    /// Length (m).
+    pub fn length(&self) -> Real {
+        norm2(sub2(self.b, self.a))
+    }
+
+    /// Distance from `p` to the closest point of the segment (m).
+    #[inline]
+    pub fn distance_to_point(&self, p: Point2) -> Real {
+        let e = sub2(self.b, self.a);
+        let w = sub2(p, self.a);
+        let l2 = e[0] * e[0] + e[1] * e[1];
+        let t = if l2 > 0.0 { ((w[0] * e[0] + w[1] * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+        norm2([w[0] - t * e[0], w[1] - t * e[1]])
+    }
+
+    /// Checks finiteness, a positive height and distinct end points.
+    pub fn validate(&self, name: &'static str) -> Result<()> {
+        let finite = self.a.iter().chain(self.b.iter()).all(|v| v.is_finite());
+        if !finite {
+            return Err(Error::invalid(name, format!("end points must be finite, got {self:?}")));
+        }
+        if !(self.height.is_finite() && self.height > 0.0) {
+            return Err(Error::invalid(name, format!("height must be finite and > 0, got {}", self.height)));
+        }
+        if self.a == self.b {
+            return Err(Error::invalid(name, format!("end points coincide at {:?}", self.a)));
+        }
+        Ok(())
+    }
+}
+
+/// A simple polygon (a piece of furniture, a pillar) extruded from the floor to `height`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Polygon {
+    /// Vertices in order (either orientation), at least three, not repeated at the end.
+    pub vertices: Vec<Point2>,
+    /// Top above the floor (m).
+    pub height: Real,
+}
+
+impl Polygon {
+    /// The axis-aligned box `[x0, x1] × [y0, y1]`.
+    pub fn rect(x0: Real, y0: Real, x1: Real, y1: Real, height: Real) -> Self {
+        Self { vertices: vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]], height }
+    }
+
+    /// A `length × width` box centred on `pose`, its length along the pose's heading.
+    pub fn oriented_box(pose: Pose2, length: Real, width: Real, height: Real) -> Self {
+        let (hl, hw) = (0.5 * length, 0.5 * width);
+        let vertices = [[-hl, -hw], [hl, -hw], [hl, hw], [-hl, hw]].iter().map(|&p| pose.transform_point(p)).collect();
+        Self { vertices, height }
+    }
+
+    /// The closed boundary as wall segments.
+    pub fn edges(&self) -> impl Iterator<Item = Segment> + '_ {
+        let n = self.vertices.len();
+        (0..n).map(move |i| Segment::new(self.vertices[i], self.vertices[(i + 1) % n], self.height))
+    }
+
+    /// Whether `p` is strictly inside (even–odd rule).
+    pub fn contains(&self, p: Point2) -> bool {
+        let n = self.vertices.len();
+        let mut inside = false;
+        for i in 0..n {
+            let a = self.vertices[i];
+            let b = self.vertices[(i + 1) % n];
+            if (a[1] > p[1]) != (b[1] > p[1]) {
+                let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                if p[0] < x {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+
+    /// Checks vertex count, finiteness and height.
+    pub fn validate(&self, name: &'static str) -> Result<()> {
+        if self.vertices.len() < 3 {
+            return Err(Error::invalid(name, format!("needs at least 3 vertices, got {}", self.vertices.len())));
+        }
+        for e in self.edges() {
+            e.validate(name)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn compose_then_between_round_trips() {
+        let a = Pose2::new(1.0, -2.0, 0.7);
+        let b = Pose2::new(-3.0, 0.5, -2.9);
+        let d = a.between(&b);
+        let c = a.compose(&d);
+        assert!((c.x - b.x).abs() < 1e-12 && (c.y - b.y).abs() < 1e-12);
+        assert!(wrap_angle(c.yaw - b.yaw).abs() < 1e-12);
+    }
+
+    #[test]
+    fn wrap_angle_lands_in_half_open_interval() {
+        use std::f64::consts::PI;
+        assert_eq!(wrap_angle(PI), PI);
+        assert!((wrap_angle(-PI) - PI).abs() < 1e-15);
+        assert!((wrap_angle(3.0 * PI + 0.1) - (-PI + 0.1)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn segment_point_distance_uses_end_points_beyond_the_span() {
+        let s = Segment::new([0.0, 0.0], [2.0, 0.0], 1.0);
+        assert!((s.distance_to_point([1.0, 0.5]) - 0.5).abs() < 1e-15);
+        assert!((s.distance_to_point([3.0, 0.0]) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn polygon_contains_and_rejects() {
+        let p = Polygon::rect(0.0, 0.0, 1.0, 2.0, 1.0);
+        assert!(p.contains([0.5, 1.0]));
+        assert!(!p.contains([1.5, 1.0]));
+        assert_eq!(p.edges().count(), 4);
+    }
+
+    #[test]
+    fn bad_segment_is_an_error() {
+        assert!(Segment::new([0.0, 0.0], [0.0, 0.0], 1.0).validate("s").is_err());
+        assert!(Segment::new([0.0, 0.0], [1.0, 0.0], 0.0).validate("s").is_err());
+        assert!(Segment::new([f64::NAN, 0.0], [1.0, 0.0], 1.0).validate("s").is_err());
+    }
+}

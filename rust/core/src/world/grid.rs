@@ -1,0 +1,266 @@
+//! Occupancy grids: the raster form of a site, turned into merged wall segments.
+//!
+//! Cell `(i, j)` is column `i` (along the grid's x) and row `j` counted from the *bottom*
+//! (along its y); its lower-left corner is `origin ∘ (i·res, j·res)`.
+
+use super::geometry::{Point2, Pose2, Segment};
+use crate::error::{Error, Result};
+use crate::math::Real;
+
+/// The state of one grid cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Cell {
+    /// Known free space.
+    Free = 0,
+    /// Known obstacle.
+    Occupied = 1,
+    /// Never observed.
+    Unknown = 2,
+}
+
+/// A rectangular occupancy grid placed in the world by `origin` (m, rad).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OccupancyGrid {
+    /// Cells along x.
+    pub width: usize,
+    /// Cells along y.
+    pub height: usize,
+    /// Cell edge (m).
+    pub resolution: Real,
+    /// The world pose of the lower-left corner of cell `(0, 0)`.
+    pub origin: Pose2,
+    /// Row-major from the bottom row: `cells[j * width + i]`.
+    pub cells: Vec<Cell>,
+}
+
+impl OccupancyGrid {
+    /// A `width × height` grid filled with `fill`.
+    pub fn new(width: usize, height: usize, resolution: Real, origin: Pose2, fill: Cell) -> Result<Self> {
+        if width == 0 || height == 0 {
+            return Err(Error::invalid("grid", format!("size must be positive, got {width} x {height}")));
+        }
+        if !(resolution.is_finite() && resolution > 0.0) {
+            return Err(Error::invalid("resolution", format!("must be finite and > 0, got {resolution}")));
+        }
+        origin.validate("origin")?;
+        Ok(Self { width, height, resolution, origin, cells: vec![fill; width * height] })
+    }
+
+    /// The cell `(i, j)`.
+    #[inline]
+    pub fn get(&self, i: usize, j: usize) -> Cell {
+        self.cells[j * self.width + i]
+    }
+
+    /// Sets the cell `(i, j)`.
+    #[inline]
+    pub fn set(&mut self, i: usize, j: usize, c: Cell) {
+        self.cells[j * self.width + i] = c;
+    }
+
+    /// World position of the centre of cell `(i, j)`.
+    pub fn cell_center(&self, i: usize, j: usize) -> Point2 {
+        self.grid_to_world([(i as Real + 0.5) * self.resolution, (j as Real + 0.5) * self.resolution])
+    }
+
+    /// Grid-frame metres to world.
+    #[inline]
+    pub fn grid_to_world(&self, p: Point2) -> Point2 {
+        self.origin.transform_point(p)
+    }
+
+    /// The cell containing world point `p`, if inside the grid.
+    pub fn world_to_cell(&self, p: Point2) -> Option<(usize, usize)> {
+        let q = self.origin.inverse_transform_point(p);
+        let (fi, fj) = ((q[0] / self.resolution).floor(), (q[1] / self.resolution).floor());
+        (fi >= 0.0 && fj >= 0.0 && fi < self.width as Real && fj < self.height as Real).then_some((fi as usize, fj as usize))
+    }
+
+    /// Sets every cell whose centre lies in the grid-frame box `[x0, x1] × [y0, y1]` (m).
+    pub fn fill_rect(&mut self, x0: Real, y0: Real, x1: Real, y1: Real, c: Cell) {
+        let r = self.resolution;
+        let i0 = ((x0 / r - 0.5).ceil().max(0.0)) as usize;
+        let j0 = ((y0 / r - 0.5).ceil().max(0.0)) as usize;
+        let i1 = ((x1 / r - 0.5).floor().min(self.width as Real - 1.0)) as i64;
+        let j1 = ((y1 / r - 0.5).floor().min(self.height as Real - 1.0)) as i64;
+        for j in j0 as i64..=j1 {
+            for i in i0 as i64..=i1 {
+                self.set(i as usize, j as usize, c);
+            }
+        }
+    }
+
+    /// Whether every cell with its centre in the grid-frame box is `c` (false if the box leaves
+    /// the grid).
+    pub fn rect_is(&self, x0: Real, y0: Real, x1: Real, y1: Real, c: Cell) -> bool {
+        let r = self.resolution;
+        if x0 < 0.0 || y0 < 0.0 || x1 > self.width as Real * r || y1 > self.height as Real * r {
+            return false;
+        }
+        let i0 = (x0 / r - 0.5).ceil() as i64;
+        let j0 = (y0 / r - 0.5).ceil() as i64;
+        let i1 = (x1 / r - 0.5).floor() as i64;
+        let j1 = (y1 / r - 0.5).floor() as i64;
+        (j0..=j1).all(|j| (i0..=i1).all(|i| self.get(i as usize, j as usize) == c))
+    }
+
+    /// The boundary of the solid cells (those for which `solid` holds) as wall segments of
+    /// `height` (m): every cell edge with a solid cell on exactly one side (the grid's outside
+    /// is not solid), collinear neighbouring edges merged into one straight run.
+    pub fn wall_segments(&self, height: Real, solid: impl Fn(Cell) -> bool) -> Vec<Segment> {
+        let (w, h) = (self.width, self.height);
+        let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h && solid(self.get(i as usize, j as usize));
+        let r = self.resolution;
+        let mut out = Vec::new();
+        // horizontal edges on grid line y = j, between rows j-1 and j
+        for j in 0..=h as i64 {
+            let mut run: Option<i64> = None;
+            for i in 0..=w as i64 {
+                let edge = i < w as i64 && occ(i, j - 1) != occ(i, j);
+                match (edge, run) {
+                    (true, None) => run = Some(i),
+                    (false, Some(i0)) => {
+                        out.push(Segment::new(self.grid_to_world([i0 as Real * r, j as Real * r]), self.grid_to_world([i as Real * r, j as Real * r]), height));
+                        run = None;
+                    }
+                    _ => {}
+                }
+            }
+        }
+        // vertical edges on grid line x = i, between columns i-1 and i
+        for i in 0..=w as i64 {
+            let mut run: Option<i64> = None;
+            for j in 0..=h as i64 {
+                let edge = j < h as i64 && occ(i - 1, j) != occ(i, j);
+                match (edge, run) {
+                    (true, None) => run = Some(j),
+                    (false, Some(j0)) => {
+                        out.push(Segment::new(self.grid_to_world([i as Real * r, j0 as Real * r]), self.grid_to_world([i as Real * r, j as Real * r]), height));
+                        run = None;
+                    }
+                    _ => {}
+                }
+            }
+        }
+        out
+    }
+
+    /// Distance (m) from each cell centre to the nearest cell centre for which `blocked` holds
+    /// (exact Euclidean distance transform, Felzenszwalb–Huttenlocher); `inf` if none is.
+    pub fn distance_field(&self, blocked: impl Fn(Cell) -> bool) -> Vec<Real> {
+        const BIG: Real = 1e18;
+        let (w, h) = (self.width, self.height);
+        let mut f: Vec<Real> = self.cells.iter().map(|&c| if blocked(c) { 0.0 } else { BIG }).collect();
+        let n = w.max(h);
+        let (mut line, mut d, mut v, mut z) = (vec![0.0; n], vec![0.0; n], vec![0usize; n], vec![0.0; n + 1]);
+        for i in 0..w {
+            for j in 0..h {
+                line[j] = f[j * w + i];
+            }
+            edt_1d(&line[..h], &mut d[..h], &mut v, &mut z);
+            for j in 0..h {
+                f[j * w + i] = d[j];
+            }
+        }
+        for j in 0..h {
+            line[..w].copy_from_slice(&f[j * w..(j + 1) * w]);
+            edt_1d(&line[..w], &mut d[..w], &mut v, &mut z);
+            f[j * w..(j + 1) * w].copy_from_slice(&d[..w]);
+        }
+        let r = self.resolution;
+        f.into_iter().map(|s| if s >= BIG * 0.5 { Real::INFINITY } else { s.sqrt() * r }).collect()
+    }
+
+    /// Marks as occupied every cell a wall of `segments` passes through (sampled at a quarter
+    /// cell, so no cell a segment crosses is skipped by more than a corner).
+    pub fn rasterize_segments(&mut self, segments: &[Segment]) {
+        for s in segments {
+            let len = s.length();
+            let n = (len / (0.25 * self.resolution)).ceil().max(1.0) as usize;
+            for k in 0..=n {
+                let t = k as Real / n as Real;
+                let p = [s.a[0] + t * (s.b[0] - s.a[0]), s.a[1] + t * (s.b[1] - s.a[1])];
+                if let Some((i, j)) = self.world_to_cell(p) {
+                    self.set(i, j, Cell::Occupied);
+                }
+            }
+        }
+    }
+}
+
+/// 1D squared distance transform of sampled function `f` into `d`.
+fn edt_1d(f: &[Real], d: &mut [Real], v: &mut [usize], z: &mut [Real]) {
+    let n = f.len();
+    let mut k = 0usize;
+    v[0] = 0;
+    z[0] = Real::NEG_INFINITY;
+    z[1] = Real::INFINITY;
+    let sq = |q: usize| (q * q) as Real;
+    for q in 1..n {
+        let mut s = ((f[q] + sq(q)) - (f[v[k]] + sq(v[k]))) / (2.0 * (q as Real - v[k] as Real));
+        while s <= z[k] {
+            k -= 1;
+            s = ((f[q] + sq(q)) - (f[v[k]] + sq(v[k]))) / (2.0 * (q as Real - v[k] as Real));
+        }
+        k += 1;
+        v[k] = q;
+        z[k] = s;
+        z[k + 1] = Real::INFINITY;
+    }
+    k = 0;
+    for (q, dq) in d.iter_mut().enumerate() {
+        while z[k + 1] < q as Real {
+            k += 1;
+        }
+        let dd = q as Real - v[k] as Real;
+        *dq = dd * dd + f[v[k]];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn single_occupied_block_gives_its_outline() {
+        let mut g = OccupancyGrid::new(6, 5, 0.5, Pose2::new(1.0, 2.0, 0.0), Cell::Free).unwrap();
+        for j in 1..3 {
+            for i in 2..5 {
+                g.set(i, j, Cell::Occupied);
+            }
+        }
+        let segs = g.wall_segments(2.0, |c| c == Cell::Occupied);
+        assert_eq!(segs.len(), 4, "{segs:?}");
+        let total: Real = segs.iter().map(|s| s.length()).sum();
+        assert!((total - 2.0 * (1.5 + 1.0)).abs() < 1e-12);
+        assert!(segs.iter().any(|s| s.a == [2.0, 2.5] && s.b == [3.5, 2.5]));
+    }
+
+    #[test]
+    fn distance_field_matches_brute_force() {
+        let mut g = OccupancyGrid::new(17, 11, 0.1, Pose2::default(), Cell::Free).unwrap();
+        for (i, j) in [(0, 0), (5, 7), (16, 3), (9, 9)] {
+            g.set(i, j, Cell::Occupied);
+        }
+        let d = g.distance_field(|c| c != Cell::Free);
+        for j in 0..11 {
+            for i in 0..17 {
+                let bf = [(0, 0), (5, 7), (16, 3), (9, 9)]
+                    .iter()
+                    .map(|&(a, b): &(i32, i32)| (((a - i as i32).pow(2) + (b - j as i32).pow(2)) as Real).sqrt() * 0.1)
+                    .fold(Real::INFINITY, Real::min);
+                assert!((d[j * 17 + i] - bf).abs() < 1e-12, "({i},{j}) {} vs {bf}", d[j * 17 + i]);
+            }
+        }
+    }
+
+    #[test]
+    fn world_to_cell_inverts_cell_center_with_yaw() {
+        let g = OccupancyGrid::new(10, 8, 0.05, Pose2::new(3.0, -1.0, 0.7), Cell::Free).unwrap();
+        for (i, j) in [(0, 0), (9, 7), (4, 2)] {
+            assert_eq!(g.world_to_cell(g.cell_center(i, j)), Some((i, j)));
+        }
+        assert_eq!(g.world_to_cell([-100.0, 0.0]), None);
+    }
+}

@@ -1,0 +1,25 @@
+//! The world an episode runs in: static geometry, scenarios, presets, moving obstacles.
+//!
+//! Geometry is planar `f64` wall segments extruded from the floor to a height (for the 3D
+//! LIDAR). Polygons (furniture, pillars) are stored as their edges.
+
+pub mod generate;
+mod geometry;
+pub mod grid;
+mod index;
+mod map;
+mod moving;
+pub mod preset;
+pub mod rosmap;
+mod scenario;
+pub mod traverse;
+
+pub use geometry::{cross2, norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
+pub use index::SegmentIndex;
+pub use map::StaticMap;
+pub use moving::{MovingObstacle, Trajectory};
+pub use preset::{preset, PRESET_NAMES};
+pub use rosmap::{load_ros_map, RosMap, RosMapOptions};
+pub use scenario::Scenario;
+pub use grid::{Cell, OccupancyGrid};
+pub use traverse::{footprint_reachability, Footprint, Reachability};

@@ -1,0 +1,166 @@
+//! A scenario: static map, start (and goal), moving obstacles and the odometry faults.
+//!
+//! Scenarios come from the named presets ([`super::preset`]), the procedural generator, an
+//! imported occupancy map, or a user's JSON file ([`Scenario::from_json_file`]):
+//!
+//! ```json
+//! {
+//!   "name": "my_corridor",
+//!   "walls":    [{"a": [0, -1], "b": [20, -1], "height": 2.0}],
+//!   "polygons": [{"vertices": [[5, 0.4], [5.6, 0.4], [5.6, 1], [5, 1]], "height": 0.8}],
+//!   "start": {"x": 1, "y": 0, "yaw": 0},
+//!   "goal":  {"x": 18, "y": 0, "yaw": 0},
+//!   "obstacles": [{"name": "chair",
+//!                  "shape": {"vertices": [[-0.25, -0.25], [0.25, -0.25], [0.25, 0.25], [-0.25, 0.25]], "height": 0.9},
+//!                  "trajectory": {"keys": [[9.0, {"x": 9, "y": 0.5, "yaw": 0}], [11.0, {"x": 7.5, "y": 0.2, "yaw": 0}]]}}],
+//!   "odometry": {"translation_noise": 0.0, "yaw_noise": 0.0, "yaw_bias": 0.0,
+//!                "faults": [{"kind": "jump", "time": 20.0, "dx": 120.0, "dy": 0.0}]}
+//! }
+//! ```
+//! Lengths in metres, angles in radians, times in seconds; `polygons`, `goal`, `obstacles` and
+//! `odometry` may be left out; unknown keys are errors.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::geometry::{Polygon, Pose2, Segment};
+use super::map::StaticMap;
+use super::moving::MovingObstacle;
+use crate::error::{Error, Result};
+use crate::sensors::OdometryConfig;
+
+/// Everything that defines an episode's world before any command is given.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Scenario {
+    /// A name for reports.
+    pub name: String,
+    /// Static walls and furniture.
+    pub map: StaticMap,
+    /// The robot's true start pose.
+    pub start: Pose2,
+    /// Where the mission wants the robot, if the scenario has a goal.
+    pub goal: Option<Pose2>,
+    /// Scripted moving obstacles.
+    pub obstacles: Vec<MovingObstacle>,
+    /// Odometry drift and faults.
+    pub odometry: OdometryConfig,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioFile {
+    name: Option<String>,
+    walls: Vec<Segment>,
+    #[serde(default)]
+    polygons: Vec<Polygon>,
+    start: Pose2,
+    goal: Option<Pose2>,
+    #[serde(default)]
+    obstacles: Vec<MovingObstacle>,
+    #[serde(default)]
+    odometry: OdometryConfig,
+}
+
+impl Scenario {
+    /// A scenario with only a static map and a start pose.
+    pub fn new(name: impl Into<String>, map: StaticMap, start: Pose2) -> Self {
+        Self { name: name.into(), map, start, goal: None, obstacles: Vec::new(), odometry: OdometryConfig::default() }
+    }
+
+    /// Checks every part; the error names the part at fault.
+    pub fn validate(&self) -> Result<()> {
+        for s in &self.map.segments {
+            s.validate("walls")?;
+        }
+        self.start.validate("start")?;
+        if let Some(g) = &self.goal {
+            g.validate("goal")?;
+        }
+        for o in &self.obstacles {
+            o.validate()?;
+        }
+        self.odometry.validate()
+    }
+
+    /// Parses the JSON scenario format above; `path` only names the source in errors.
+    pub fn from_json_str(text: &str, path: &str) -> Result<Self> {
+        let f: ScenarioFile = serde_json::from_str(text)
+            .map_err(|e| Error::map_file(path, format!("line {} column {}", e.line(), e.column()), e.to_string()))?;
+        let mut map = StaticMap::new();
+        for (i, w) in f.walls.into_iter().enumerate() {
+            w.validate("walls").map_err(|e| Error::map_file(path, format!("walls[{i}]"), e.to_string()))?;
+            map.segments.push(w);
+        }
+        for (i, p) in f.polygons.into_iter().enumerate() {
+            map.add_polygon(p).map_err(|e| Error::map_file(path, format!("polygons[{i}]"), e.to_string()))?;
+        }
+        let sc = Scenario {
+            name: f.name.unwrap_or_else(|| "scenario".into()),
+            map,
+            start: f.start,
+            goal: f.goal,
+            obstacles: f.obstacles,
+            odometry: f.odometry,
+        };
+        sc.start.validate("start").map_err(|e| Error::map_file(path, "start", e.to_string()))?;
+        for (i, o) in sc.obstacles.iter().enumerate() {
+            o.validate().map_err(|e| Error::map_file(path, format!("obstacles[{i}]"), e.to_string()))?;
+        }
+        sc.validate().map_err(|e| Error::map_file(path, "scenario", e.to_string()))?;
+        Ok(sc)
+    }
+
+    /// Reads a JSON scenario file.
+    pub fn from_json_file(path: impl AsRef<Path>) -> Result<Self> {
+        let p = path.as_ref();
+        let text = std::fs::read_to_string(p).map_err(|e| Error::map_file(p, "file", e.to_string()))?;
+        Self::from_json_str(&text, &p.display().to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DOC_EXAMPLE: &str = r#"{
+      "name": "my_corridor",
+      "walls":    [{"a": [0, -1], "b": [20, -1], "height": 2.0}],
+      "polygons": [{"vertices": [[5, 0.4], [5.6, 0.4], [5.6, 1], [5, 1]], "height": 0.8}],
+      "start": {"x": 1, "y": 0, "yaw": 0},
+      "goal":  {"x": 18, "y": 0, "yaw": 0},
+      "obstacles": [{"name": "chair",
+                     "shape": {"vertices": [[-0.25, -0.25], [0.25, -0.25], [0.25, 0.25], [-0.25, 0.25]], "height": 0.9},
+                     "trajectory": {"keys": [[9.0, {"x": 9, "y": 0.5, "yaw": 0}], [11.0, {"x": 7.5, "y": 0.2, "yaw": 0}]]}}],
+      "odometry": {"translation_noise": 0.0, "yaw_noise": 0.0, "yaw_bias": 0.0,
+                   "faults": [{"kind": "jump", "time": 20.0, "dx": 120.0, "dy": 0.0}]}
+    }"#;
+
+    #[test]
+    fn documented_example_parses() {
+        let s = Scenario::from_json_str(DOC_EXAMPLE, "doc.json").unwrap();
+        assert_eq!(s.map.segments.len(), 5);
+        assert_eq!(s.obstacles[0].name, "chair");
+        assert_eq!(s.odometry.faults.len(), 1);
+    }
+
+    #[test]
+    fn syntax_error_names_file_and_line() {
+        let err = Scenario::from_json_str("{\n \"walls\": [,\n}", "bad.json").unwrap_err().to_string();
+        assert!(err.starts_with("bad.json: line 2"), "{err}");
+    }
+
+    #[test]
+    fn bad_wall_names_its_index() {
+        let text = r#"{"walls": [{"a": [0, 0], "b": [1, 0], "height": 1}, {"a": [0, 0], "b": [0, 0], "height": 1}],
+                       "start": {"x": 0, "y": 0, "yaw": 0}}"#;
+        let err = Scenario::from_json_str(text, "w.json").unwrap_err().to_string();
+        assert!(err.contains("w.json: walls[1]"), "{err}");
+    }
+
+    #[test]
+    fn unknown_key_is_an_error() {
+        let text = r#"{"walls": [], "start": {"x": 0, "y": 0, "yaw": 0}, "colour": "red"}"#;
+        assert!(Scenario::from_json_str(text, "k.json").unwrap_err().to_string().contains("colour"));
+    }
+}

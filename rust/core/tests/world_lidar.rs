@@ -1,0 +1,149 @@
+//! The polar-sweep LIDAR against an independent brute-force f64 ray caster.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use shieldnav_core::sensors::{Lidar, LidarConfig, LidarMount, Scan};
+use shieldnav_core::world::{preset, Pose2, Segment, PRESET_NAMES};
+
+/// Brute force in the world frame: every beam against every wall, Cramer's rule on
+/// `o + t·d = a + s·(b − a)`, then the height window of the beam's elevation.
+fn reference(walls: &[Segment], cfg: &LidarConfig, body: Pose2) -> Vec<f64> {
+    let m = cfg.mount;
+    let (sy, cy) = body.yaw.sin_cos();
+    let o = [body.x + cy * m.x - sy * m.y, body.y + sy * m.x + cy * m.y];
+    let yaw = body.yaw + m.yaw;
+    let elev: Vec<f64> = if cfg.channels == 1 {
+        vec![0.0]
+    } else {
+        (0..cfg.channels).map(|k| cfg.vertical_fov.0 + k as f64 * (cfg.vertical_fov.1 - cfg.vertical_fov.0) / (cfg.channels - 1) as f64).collect()
+    };
+    let mut out = vec![f64::INFINITY; cfg.channels * cfg.columns];
+    for (k, el) in elev.iter().enumerate() {
+        for i in 0..cfg.columns {
+            let az = yaw + std::f64::consts::TAU * i as f64 / cfg.columns as f64;
+            let d = [az.cos(), az.sin()];
+            let mut best = f64::INFINITY;
+            for w in walls {
+                let e = [w.b[0] - w.a[0], w.b[1] - w.a[1]];
+                // [d, -e] [t, s]^T = a - o
+                let det = d[0] * (-e[1]) - d[1] * (-e[0]);
+                if det.abs() < 1e-300 {
+                    continue;
+                }
+                let r = [w.a[0] - o[0], w.a[1] - o[1]];
+                let t = (r[0] * (-e[1]) - r[1] * (-e[0])) / det;
+                let s = (d[0] * r[1] - d[1] * r[0]) / det;
+                if t < 0.0 || !(0.0..=1.0).contains(&s) {
+                    continue;
+                }
+                let z = m.z + t * el.tan();
+                if z < 0.0 || z > w.height {
+                    continue;
+                }
+                best = best.min(t / el.cos());
+            }
+            out[k * cfg.columns + i] = if best >= cfg.min_range && best <= cfg.max_range { best } else { f64::INFINITY };
+        }
+    }
+    out
+}
+
+fn compare(walls: &[Segment], cfg: LidarConfig, poses: &[Pose2]) -> usize {
+    let mut lidar = Lidar::new(cfg).unwrap();
+    let mut scan = Scan::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let mut hits = 0;
+    for &p in poses {
+        lidar.scan_into(&[walls], p, 0.0, &mut rng, &mut scan).unwrap();
+        let r = reference(walls, &cfg, p);
+        for (j, (a, b)) in scan.ranges.iter().zip(&r).enumerate() {
+            if a.is_finite() || b.is_finite() {
+                assert!((a - b).abs() <= 1e-6, "pose {p:?} beam {j}: sweep {a} vs reference {b}");
+                hits += 1;
+            }
+        }
+    }
+    hits
+}
+
+fn exact(channels: usize, columns: usize) -> LidarConfig {
+    LidarConfig { channels, columns, range_noise_std: 0.0, max_range: 60.0, ..LidarConfig::default() }
+}
+
+#[test]
+fn planar_ranges_match_brute_force_on_every_preset() {
+    for name in PRESET_NAMES {
+        let s = preset(name).unwrap();
+        let poses = [s.start, Pose2::new(s.start.x + 3.3, s.start.y + 0.2, 0.77), Pose2::new(s.start.x + 4.1, s.start.y - 0.3, -2.5)];
+        for cols in [512, 1024, 2048] {
+            let hits = compare(&s.map.segments, exact(1, cols), &poses);
+            assert!(hits > cols, "{name}: only {hits} returns");
+        }
+    }
+}
+
+#[test]
+fn grazing_beams_down_a_long_corridor_are_exact() {
+    let walls = [Segment::new([-200.0, -1.0], [200.0, -1.0], 2.5), Segment::new([-200.0, 1.0], [200.0, 1.0], 2.5)];
+    // beams nearly parallel to the walls hit them at up to ~60 m: the worst case for f32 casts
+    let poses = [Pose2::new(0.0, 0.0, 0.0), Pose2::new(3.0, 0.37, 0.001), Pose2::new(-7.0, -0.6, std::f64::consts::PI - 1e-4)];
+    let hits = compare(&walls, exact(1, 2048), &poses);
+    assert!(hits > 3 * 2000);
+}
+
+#[test]
+fn random_segment_soups_match_brute_force() {
+    let mut rng = ChaCha8Rng::seed_from_u64(42);
+    for _ in 0..5 {
+        let walls: Vec<Segment> = (0..200)
+            .map(|_| {
+                let a = [rng.random_range(-15.0..15.0), rng.random_range(-15.0..15.0)];
+                let b = [a[0] + rng.random_range(-3.0..3.0), a[1] + rng.random_range(-3.0..3.0)];
+                Segment::new(a, b, rng.random_range(0.3..3.0))
+            })
+            .collect();
+        let pose = Pose2::new(rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0), rng.random_range(-3.0..3.0));
+        compare(&walls, exact(1, 1024), &[pose]);
+        compare(&walls, LidarConfig { mount: LidarMount { x: 0.3, y: -0.1, z: 0.7, yaw: 0.4 }, ..exact(32, 1024) }, &[pose]);
+    }
+}
+
+#[test]
+fn three_d_scan_sees_over_low_clutter_and_matches_brute_force() {
+    let s = preset("dynamic_obstacles").unwrap();
+    let cfg = exact(32, 1024);
+    let hits = compare(&s.map.segments, cfg, &[s.start, Pose2::new(6.0, 0.1, 0.2)]);
+    assert!(hits > 10_000);
+}
+
+#[test]
+fn beam_through_a_segment_end_point_hits_it() {
+    // a wall whose end point lies exactly on beam 0 (+x)
+    let walls = [Segment::new([2.0, 0.0], [2.0, 1.0], 2.0), Segment::new([3.0, 0.0], [3.0, -1.0], 2.0)];
+    let mut lidar = Lidar::new(exact(1, 1024)).unwrap();
+    let mut scan = Scan::default();
+    lidar.scan_into(&[&walls], Pose2::default(), 0.0, &mut ChaCha8Rng::seed_from_u64(0), &mut scan).unwrap();
+    assert_eq!(scan.ranges[0], 2.0);
+}
+
+#[test]
+fn moving_obstacles_are_seen_when_they_arrive() {
+    let s = preset("dynamic_obstacles").unwrap();
+    let door = s.obstacles.iter().find(|o| o.name == "door").unwrap();
+    let mut lidar = Lidar::new(exact(1, 1024)).unwrap();
+    let pose = Pose2::new(15.0, 0.4, 0.0);
+    let mut closed = Vec::new();
+    let mut open = Vec::new();
+    door.segments_at(19.0, &mut closed);
+    door.segments_at(23.0, &mut open);
+    let mut a = Scan::default();
+    let mut b = Scan::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    lidar.scan_into(&[&s.map.segments, &closed], pose, 19.0, &mut rng, &mut a).unwrap();
+    lidar.scan_into(&[&s.map.segments, &open], pose, 23.0, &mut rng, &mut b).unwrap();
+    // the beam toward the open door's leaf (x = 17, y in [-0.9, 0]) from (15, 0.4)
+    let az = (-0.8f64).atan2(2.0).rem_euclid(std::f64::consts::TAU);
+    let i = (az / std::f64::consts::TAU * 1024.0).round() as usize;
+    assert!(b.ranges[i] < a.ranges[i] - 0.5, "open {} closed {}", b.ranges[i], a.ranges[i]);
+    assert!((b.ranges[i] - 2.0 / az.cos()).abs() < 0.06);
+}

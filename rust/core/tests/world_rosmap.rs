@@ -1,0 +1,181 @@
+//! Every map in `<repo>/../shared/maps` loads; its walls lie on occupied-cell boundaries; the
+//! start is inside the building; the LIDAR is exact on it.
+
+use std::path::PathBuf;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use shieldnav_core::sensors::{ray_segment_distance, Lidar, LidarConfig, Scan};
+use shieldnav_core::world::{load_ros_map, Cell, RosMap, RosMapOptions};
+
+fn maps_dir() -> Option<PathBuf> {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps");
+    if d.is_dir() {
+        Some(d)
+    } else {
+        eprintln!("SKIPPED: {} is absent (the shared maps folder beside the repository)", d.display());
+        None
+    }
+}
+
+fn all_maps(unknown_is_wall: bool) -> Vec<(String, RosMap)> {
+    let Some(dir) = maps_dir() else { return Vec::new() };
+    let mut out = Vec::new();
+    let mut dirs: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().filter(|e| e.path().is_dir()).collect();
+    dirs.sort_by_key(|e| e.path());
+    for e in dirs {
+        let yaml = std::fs::read_dir(e.path()).unwrap().flatten().map(|f| f.path()).find(|p| p.extension().is_some_and(|x| x == "yaml")).unwrap();
+        let m = load_ros_map(&yaml, &RosMapOptions { wall_height: 2.5, unknown_is_wall }).unwrap_or_else(|err| panic!("{}: {err}", yaml.display()));
+        out.push((e.file_name().to_string_lossy().into_owned(), m));
+    }
+    assert_eq!(out.len(), 8, "expected the 8 maps of SOURCES.md");
+    out
+}
+
+#[test]
+fn every_map_loads_with_walls_on_occupied_boundaries_and_an_interior_start() {
+    check_walls_and_start(false);
+}
+
+#[test]
+fn with_unknown_as_wall_walls_bound_the_free_space() {
+    check_walls_and_start(true);
+}
+
+fn check_walls_and_start(unknown_is_wall: bool) {
+    for (name, m) in all_maps(unknown_is_wall) {
+        let g = &m.grid;
+        let solid = |c: Cell| c == Cell::Occupied || (unknown_is_wall && c == Cell::Unknown);
+        let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < g.width && (j as usize) < g.height && solid(g.get(i as usize, j as usize));
+        let res = g.resolution;
+        let mut length = 0.0;
+        for s in &m.scenario.map.segments {
+            let a = g.origin.inverse_transform_point(s.a);
+            let b = g.origin.inverse_transform_point(s.b);
+            let n = (s.length() / res).round() as usize;
+            assert!(n >= 1 && (s.length() - n as f64 * res).abs() < 1e-6, "{name}: segment not a whole number of cells");
+            length += s.length();
+            for k in 0..n {
+                // the middle of each unit edge, in cells
+                let t = (k as f64 + 0.5) / n as f64;
+                let p = [(a[0] + t * (b[0] - a[0])) / res, (a[1] + t * (b[1] - a[1])) / res];
+                let horizontal = (a[1] - b[1]).abs() < 1e-6;
+                let (c1, c2) = if horizontal {
+                    let (i, j) = (p[0].floor() as i64, p[1].round() as i64);
+                    (occ(i, j - 1), occ(i, j))
+                } else {
+                    let (i, j) = (p[0].round() as i64, p[1].floor() as i64);
+                    (occ(i - 1, j), occ(i, j))
+                };
+                assert!(c1 != c2, "{name}: wall edge at cell {p:?} is not an occupied boundary");
+            }
+        }
+        // and every occupied boundary edge is covered: total lengths agree
+        let mut edges = 0usize;
+        for j in 0..=g.height as i64 {
+            for i in 0..=g.width as i64 {
+                if i < g.width as i64 && occ(i, j - 1) != occ(i, j) {
+                    edges += 1;
+                }
+                if j < g.height as i64 && occ(i - 1, j) != occ(i, j) {
+                    edges += 1;
+                }
+            }
+        }
+        assert!((length - edges as f64 * res).abs() < 1e-6 * edges as f64, "{name}: walls {length} m vs {edges} edges");
+        // the start: free, with room for the robot, and not connected through free cells to the border
+        let (si, sj) = g.world_to_cell([m.scenario.start.x, m.scenario.start.y]).unwrap();
+        assert_eq!(g.get(si, sj), Cell::Free, "{name}");
+        assert!(m.start_clearance >= 0.6, "{name}: clearance {}", m.start_clearance);
+        // inside: rays from the start end on non-free cells, not outside the image (independent of the
+        // loader's own test: 720 rays, stepped at a tenth of a cell)
+        let mut escaped = 0;
+        for k in 0..720 {
+            let (sn, cs) = (k as f64 * std::f64::consts::TAU / 720.0).sin_cos();
+            let (mut x, mut y) = (si as f64 + 0.5, sj as f64 + 0.5);
+            loop {
+                x += 0.1 * cs;
+                y += 0.1 * sn;
+                if x < 0.0 || y < 0.0 || x >= g.width as f64 || y >= g.height as f64 {
+                    escaped += 1;
+                    break;
+                }
+                if g.get(x as usize, y as usize) != Cell::Free {
+                    break;
+                }
+            }
+        }
+        assert!(escaped < 72, "{name}: {escaped}/720 rays from the start leave the map");
+        eprintln!("{name}: {} walls, start {:?}, clearance {:.2} m", m.scenario.map.segments.len(), m.scenario.start, m.start_clearance);
+    }
+}
+
+#[test]
+fn lidar_is_exact_on_real_maps() {
+    for (name, m) in all_maps(true) {
+        let cfg = LidarConfig { range_noise_std: 0.0, max_range: 20.0, ..LidarConfig::default() };
+        let mut lidar = Lidar::new(cfg).unwrap();
+        let mut scan = Scan::default();
+        let pose = m.scenario.start;
+        lidar.scan_into(&[&m.scenario.map.segments], pose, 0.0, &mut ChaCha8Rng::seed_from_u64(0), &mut scan).unwrap();
+        let sp = lidar.sensor_pose(pose);
+        let mut returns = 0;
+        for i in 0..cfg.columns {
+            let az = sp.yaw + std::f64::consts::TAU * i as f64 / cfg.columns as f64;
+            let d = [az.cos(), az.sin()];
+            let best = m.scenario.map.segments.iter().filter_map(|s| ray_segment_distance([sp.x, sp.y], d, s.a, s.b)).fold(f64::INFINITY, f64::min);
+            let want = if best >= cfg.min_range && best <= cfg.max_range { best } else { f64::INFINITY };
+            let got = scan.ranges[i];
+            assert!(got == want || (got - want).abs() <= 1e-6, "{name} beam {i}: {got} vs {want}");
+            returns += want.is_finite() as usize;
+        }
+        assert!(returns > 700, "{name}: only {returns} returns from the start");
+    }
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("shieldnav_rosmap_{tag}_{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn rgba_png_uses_luminance_alpha_and_negate() {
+    let d = temp_dir("png");
+    // 4 x 1 RGBA: black, white, transparent white, pure red (luminance 76 -> p = 0.70)
+    let px: [u8; 16] = [0, 0, 0, 255, 255, 255, 255, 255, 255, 255, 255, 0, 255, 0, 0, 255];
+    let file = std::fs::File::create(d.join("m.png")).unwrap();
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), 4, 1);
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header().unwrap().write_image_data(&px).unwrap();
+    for (negate, want) in [
+        (0, [Cell::Occupied, Cell::Free, Cell::Unknown, Cell::Occupied]),
+        (1, [Cell::Free, Cell::Occupied, Cell::Unknown, Cell::Unknown]),
+    ] {
+        std::fs::write(d.join("m.yaml"), format!("image: m.png\nresolution: 0.5\norigin: [1.0, 2.0, 0.0]\nnegate: {negate}\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")).unwrap();
+        // no interior start in a 4 x 1 image: the error says so, naming the file
+        let err = load_ros_map(d.join("m.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+        assert!(err.contains("m.yaml: map: no free region"), "{err}");
+        let meta = shieldnav_core::world::rosmap::parse_ros_yaml(&std::fs::read_to_string(d.join("m.yaml")).unwrap(), &d.join("m.yaml")).unwrap();
+        let g = shieldnav_core::world::rosmap::rasterize(&meta).unwrap();
+        assert_eq!(g.cells, want, "negate {negate}");
+    }
+}
+
+#[test]
+fn malformed_files_name_file_and_field() {
+    let d = temp_dir("bad");
+    std::fs::write(d.join("a.yaml"), "image: missing.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("a.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("a.yaml: field image") && e.contains("missing.pgm"), "{e}");
+    std::fs::write(d.join("t.pgm"), b"P5\n10 10\n255\n\x00\x00").unwrap();
+    std::fs::write(d.join("b.yaml"), "image: t.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("b.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("t.pgm: pixel data"), "{e}");
+    std::fs::write(d.join("c.yaml"), "image: t.pgm\nresolution: -1\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("c.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("c.yaml: field resolution"), "{e}");
+    let e = load_ros_map(d.join("nope.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("nope.yaml: file"), "{e}");
+}
