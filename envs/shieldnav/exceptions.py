@@ -11,3 +11,7 @@ class InvalidArgumentError(ShieldnavError, ValueError):
 
 class SolverError(ShieldnavError, RuntimeError):
     """A numerical solver failed for a reason other than infeasibility."""
+
+
+class MapFileError(ShieldnavError, ValueError):
+    """A map, image or scenario file is missing or malformed; the message names file and field."""
