@@ -12,5 +12,6 @@ pub mod math;
 pub mod shield;
 pub mod world;
 pub mod sensors;
+pub mod robot;
 
 pub use error::{Error, Result};
