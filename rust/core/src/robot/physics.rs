@@ -134,34 +134,42 @@ impl PhysicsScene {
         }
         self.world.integration_parameters.dt = dt as f32;
         self.world.step();
-        // refresh the narrow phase at the final poses, so contacts describe the new state
-        self.world.detect_collisions(&(), &());
         Ok(self.contacts())
     }
 
-    /// The smallest contact-point distance of the robot's contact pairs (m), if any.
-    pub fn min_contact_distance(&self) -> Option<Real> {
-        self.world.narrow_phase.contact_pairs_with(self.robot_collider).flat_map(|p| p.manifolds().iter().flat_map(|m| m.points.iter().map(|c| c.dist as Real))).reduce(Real::min)
-    }
-
-    /// The robot's current contacts (from the last step's narrow phase).
+    /// The robot's contacts at the current poses: every wall collider whose shape comes within
+    /// [`CONTACT_TOLERANCE`] of the footprint (candidates from rapier's broad-phase tree, only
+    /// fixed colliders, whose boxes never go stale) and every obstacle, each measured with
+    /// parry's exact contact query.
     pub fn contacts(&self) -> ContactReport {
         let mut rep = ContactReport::default();
-        for pair in self.world.narrow_phase.contact_pairs_with(self.robot_collider) {
-            let other = if pair.collider1 == self.robot_collider { pair.collider2 } else { pair.collider1 };
-            let is_wall = self.world.colliders.get(other).and_then(|c| c.parent()) == Some(self.walls);
-            for m in pair.manifolds() {
-                for p in &m.points {
-                    if p.dist <= CONTACT_TOLERANCE as f32 {
-                        rep.count += 1;
-                        if is_wall {
-                            rep.with_walls += 1;
-                        } else {
-                            rep.with_obstacles += 1;
-                        }
-                        rep.max_penetration = rep.max_penetration.max(-(p.dist as Real));
+        let robot = &self.world.colliders[self.robot_collider];
+        let rpos = *robot.position();
+        let tol = CONTACT_TOLERANCE as f32;
+        let mut measure = |co: &Collider, is_wall: bool| {
+            if let Ok(Some(c)) = rapier2d::parry::query::contact(&rpos, robot.shape(), co.position(), co.shape(), tol) {
+                if c.dist <= tol {
+                    rep.count += 1;
+                    if is_wall {
+                        rep.with_walls += 1;
+                    } else {
+                        rep.with_obstacles += 1;
                     }
+                    rep.max_penetration = rep.max_penetration.max(-(c.dist as Real));
                 }
+            }
+        };
+        let aabb = robot.shape().compute_aabb(&rpos);
+        let half = (aabb.maxs - aabb.mins) * 0.5 + Vector::splat(2.0 * tol);
+        let probe = rapier2d::parry::shape::Cuboid::new(half);
+        let probe_pos = rapier2d::math::Pose::from_translation((aabb.maxs + aabb.mins) * 0.5);
+        let filter = QueryFilter::only_fixed().exclude_collider(self.robot_collider);
+        for (_, co) in self.world.intersect_shape(probe_pos, &probe, filter) {
+            measure(co, true);
+        }
+        for h in &self.obstacles {
+            for &ch in self.world.bodies[*h].colliders() {
+                measure(&self.world.colliders[ch], false);
             }
         }
         rep
