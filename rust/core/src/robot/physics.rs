@@ -41,7 +41,6 @@ pub struct PhysicsScene {
     world: PhysicsWorld,
     robot: RigidBodyHandle,
     robot_collider: ColliderHandle,
-    walls: RigidBodyHandle,
     obstacles: Vec<RigidBodyHandle>,
 }
 
@@ -85,7 +84,7 @@ impl PhysicsScene {
         let body = RigidBodyBuilder::dynamic().translation(v(start.x, start.y)).rotation(start.yaw as f32).can_sleep(false).ccd_enabled(true);
         // Spot's mass: ~32 kg over 0.55 m²
         let (robot, robot_collider) = world.insert(body, collider.density(58.0).friction(0.0));
-        Ok(Self { world, robot, robot_collider, walls: wall_body, obstacles: handles })
+        Ok(Self { world, robot, robot_collider, obstacles: handles })
     }
 
     /// The robot's true pose.

@@ -94,6 +94,9 @@ impl Corridor {
     }
 }
 
+/// A placed box: its rectangle (grid metres), height, and the cells it filled.
+type Furniture = ([Real; 4], Real, Vec<(usize, usize)>);
+
 struct Room {
     rect: [Real; 4],
     door: [Real; 4],
@@ -131,7 +134,7 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     }
     // walls come from the grid before furniture; furniture is separate polygons
     let walls_grid = grid.clone();
-    let mut furniture: Vec<([Real; 4], Real, Vec<(usize, usize)>)> = Vec::new();
+    let mut furniture: Vec<Furniture> = Vec::new();
     let corridor_count = corridors.len();
     for _ in 0..cfg.furniture {
         let c = corridors[rng.random_range(0..corridor_count)];
