@@ -80,7 +80,6 @@ pub struct World {
     next_scan: Real,
     scan: Scan,
     index: SegmentIndex,
-    near: Vec<Segment>,
     moving: Vec<Segment>,
     contacts: ContactReport,
 }
@@ -109,7 +108,6 @@ impl World {
             next_scan: 0.0,
             scan: Scan::default(),
             index,
-            near: Vec::new(),
             moving: Vec::new(),
             contacts: ContactReport::default(),
         };
@@ -139,14 +137,11 @@ impl World {
 
     fn take_scan(&mut self) -> Result<()> {
         let pose = self.physics.robot_pose();
-        let sp = self.lidar.sensor_pose(pose);
-        let reach = self.config.lidar.max_range + self.config.lidar.mount.x.hypot(self.config.lidar.mount.y);
-        self.index.query_into([sp.x, sp.y], reach, &mut self.near);
         self.moving.clear();
         for o in &self.scenario.obstacles {
             o.segments_at(self.time, &mut self.moving);
         }
-        self.lidar.scan_into(&[&self.near, &self.moving], pose, self.time, &mut self.rng, &mut self.scan)?;
+        self.lidar.scan_indexed_into(&self.index, &self.moving, pose, self.time, &mut self.rng, &mut self.scan)?;
         self.next_scan += self.lidar.period();
         Ok(())
     }
