@@ -51,6 +51,9 @@ impl Default for LidarMount {
     }
 }
 
+/// The largest accepted `max_range` (m); an OS0 reaches about 50 m.
+pub const MAX_RANGE_LIMIT: Real = 200.0;
+
 /// LIDAR parameters. The default is a planar 1024-column ring at 10 Hz, range 0.1–20 m,
 /// 1 cm range noise, no dropout.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -108,8 +111,8 @@ impl LidarConfig {
         if !(self.min_range.is_finite() && self.min_range >= 0.0) {
             return Err(Error::invalid("min_range", format!("must be finite and >= 0, got {}", self.min_range)));
         }
-        if !(self.max_range.is_finite() && self.max_range > self.min_range) {
-            return Err(Error::invalid("max_range", format!("must be finite and > min_range, got {}", self.max_range)));
+        if !(self.max_range.is_finite() && self.max_range > self.min_range && self.max_range <= MAX_RANGE_LIMIT) {
+            return Err(Error::invalid("max_range", format!("must be > min_range and <= {MAX_RANGE_LIMIT} m, got {}", self.max_range)));
         }
         if !(self.range_noise_std.is_finite() && self.range_noise_std >= 0.0) {
             return Err(Error::invalid("range_noise_std", format!("must be finite and >= 0, got {}", self.range_noise_std)));

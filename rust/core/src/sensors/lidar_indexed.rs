@@ -18,7 +18,7 @@ const SECTOR: usize = 16;
 pub(super) struct IndexedScratch {
     /// Bucket offsets `(di, dj)` sorted by a lower bound of their distance, for `key`.
     offsets: Vec<(i32, i32)>,
-    key: (u64, u64),
+    key: (u64, u64, i32),
     /// Per wall: the scan number in which it was swept.
     seen: Vec<u32>,
     epoch: u32,
@@ -56,9 +56,11 @@ impl Lidar {
             }
         }
         let cell = index.cell();
-        let key = (cell.to_bits(), c.max_range.to_bits());
+        let (nx, ny) = index.dims();
+        // offsets beyond the index's extent are never inside it
+        let r = ((c.max_range / cell).ceil() + 1.0).min(nx.max(ny) as Real) as i32;
+        let key = (cell.to_bits(), c.max_range.to_bits(), r);
         if scratch.key != key || scratch.offsets.is_empty() {
-            let r = (c.max_range / cell).ceil() as i32 + 1;
             let lb = |d: i32| ((d.abs() - 1).max(0) as Real) * cell;
             let mut offs: Vec<(Real, i32, i32)> = Vec::new();
             for dj in -r..=r {
@@ -96,7 +98,6 @@ impl Lidar {
             refresh(&mut scratch.sector_max, &out.ranges, 0, sectors as i64 - 1);
         }
         let origin = index.origin();
-        let (nx, ny) = index.dims();
         let ci = ((sp.x - origin[0]) / cell).floor() as i64;
         let cj = ((sp.y - origin[1]) / cell).floor() as i64;
         let inv_step = n as Real / std::f64::consts::TAU;

@@ -108,6 +108,15 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     if !(cfg.resolution.is_finite() && cfg.resolution > 0.0 && cfg.resolution <= 0.1) {
         return Err(Error::invalid("resolution", format!("must be in (0, 0.1] m, got {}", cfg.resolution)));
     }
+    if cfg.furniture > 1000 {
+        return Err(Error::invalid("furniture", format!("at most 1000 pieces, got {}", cfg.furniture)));
+    }
+    if !(cfg.margin.is_finite() && (0.0..=0.3).contains(&cfg.margin)) {
+        return Err(Error::invalid("margin", format!("must be in [0, 0.3] m, got {}", cfg.margin)));
+    }
+    if !(cfg.footprint.width.is_finite() && cfg.footprint.length.is_finite() && cfg.footprint.width > 0.0 && cfg.footprint.length >= cfg.footprint.width && cfg.footprint.width <= 0.8 && cfg.footprint.length <= 1.6) {
+        return Err(Error::invalid("footprint", format!("needs 0 < width <= length, width <= 0.8 m, length <= 1.6 m (corridors are 1.0-3.0 m), got {:?}", cfg.footprint)));
+    }
     if !(cfg.wall_height.is_finite() && cfg.wall_height > 0.0) {
         return Err(Error::invalid("wall_height", format!("must be finite and > 0, got {}", cfg.wall_height)));
     }
