@@ -9,20 +9,22 @@ The shield (paper Sec. III) filters a nominal velocity against a LIDAR scan::
 """
 
 from shieldnav import exceptions
-from shieldnav._core import NominalController, Shield, ShieldOutcome, ViewPlanner, __version__
+from shieldnav._core import NominalController, Shield, ShieldOutcome, ViewPlanner, World, __version__
 from shieldnav.config import SHIELD_DEFAULTS
-from shieldnav.exceptions import InvalidArgumentError, ShieldnavError, SolverError
+from shieldnav.exceptions import InvalidArgumentError, MapFileError, ShieldnavError, SolverError
 
 
 __all__ = [
     "SHIELD_DEFAULTS",
     "InvalidArgumentError",
+    "MapFileError",
     "NominalController",
     "Shield",
     "ShieldOutcome",
     "ShieldnavError",
     "SolverError",
     "ViewPlanner",
+    "World",
     "__version__",
     "exceptions",
 ]

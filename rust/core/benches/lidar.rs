@@ -50,6 +50,15 @@ fn bench(c: &mut Criterion) {
     ] {
         let mut lidar = Lidar::new(cfg).unwrap();
         g.throughput(Throughput::Elements((cfg.channels * cfg.columns) as u64));
+        let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        let mut k = 0;
+        g.bench_function(format!("{name}_indexed"), |b| {
+            b.iter(|| {
+                k = (k + 1) % poses.len();
+                lidar.scan_indexed_into(black_box(&index), &[], poses[k], 0.0, &mut rng, &mut scan).unwrap();
+                black_box(&scan.ranges);
+            })
+        });
         let mut k = 0;
         g.bench_function(name, |b| {
             b.iter(|| {
@@ -80,16 +89,14 @@ fn bench(c: &mut Criterion) {
         };
         for max_range in [10.0, 20.0] {
             let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range, ..LidarConfig::default() }).unwrap();
-            let mut index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).unwrap();
-            let mut near = Vec::new();
+            let index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).unwrap();
             let start = m.scenario.start;
             let mut k = 0;
             g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}", m.scenario.map.segments.len()), |b| {
                 b.iter(|| {
                     k = (k + 1) % 16;
                     let p = Pose2::new(start.x + 0.05 * k as f64, start.y, 0.3 * k as f64);
-                    index.query_into([p.x, p.y], max_range, &mut near);
-                    lidar.scan_into(&[black_box(&near)], p, 0.0, &mut rng, &mut scan).unwrap();
+                    lidar.scan_indexed_into(black_box(&index), &[], p, 0.0, &mut rng, &mut scan).unwrap();
                     black_box(&scan.ranges);
                 })
             });

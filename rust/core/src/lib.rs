@@ -14,5 +14,6 @@ pub mod planner;
 pub mod shield;
 pub mod world;
 pub mod sensors;
+pub mod robot;
 
 pub use error::{Error, Result};

@@ -147,3 +147,35 @@ fn moving_obstacles_are_seen_when_they_arrive() {
     assert!(b.ranges[i] < a.ranges[i] - 0.5, "open {} closed {}", b.ranges[i], a.ranges[i]);
     assert!((b.ranges[i] - 2.0 / az.cos()).abs() < 0.06);
 }
+
+#[test]
+fn indexed_scan_equals_the_full_scan_bit_for_bit() {
+    use shieldnav_core::world::generate::{generate, GeneratorConfig, SiteKind};
+    use shieldnav_core::world::SegmentIndex;
+    let mut worlds: Vec<Vec<Segment>> = PRESET_NAMES.iter().map(|n| preset(n).unwrap().map.segments).collect();
+    worlds.push(generate(2, &GeneratorConfig::default()).unwrap().scenario.map.segments);
+    worlds.push(generate(2, &GeneratorConfig { kind: SiteKind::Tunnel, ..Default::default() }).unwrap().scenario.map.segments);
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let extra = [Segment::new([3.0, -0.3], [3.2, 0.4], 1.0)];
+    for walls in worlds {
+        let (lo, hi) = {
+            let xs = walls.iter().flat_map(|s| [s.a[0], s.b[0]]);
+            let ys = walls.iter().flat_map(|s| [s.a[1], s.b[1]]);
+            ([xs.clone().fold(f64::INFINITY, f64::min), ys.clone().fold(f64::INFINITY, f64::min)], [xs.fold(f64::NEG_INFINITY, f64::max), ys.fold(f64::NEG_INFINITY, f64::max)])
+        };
+        for cell in [1.0, 2.0, 3.7] {
+            let index = SegmentIndex::new(walls.clone(), cell).unwrap();
+            for (channels, max_range) in [(1, 20.0), (1, 6.0), (16, 20.0)] {
+                let mut lidar = Lidar::new(LidarConfig { channels, max_range, ..exact(channels, 1024) }).unwrap();
+                let (mut a, mut b) = (Scan::default(), Scan::default());
+                for _ in 0..20 {
+                    let p = Pose2::new(rng.random_range(lo[0]..hi[0]), rng.random_range(lo[1]..hi[1]), rng.random_range(-3.2..3.2));
+                    lidar.scan_into(&[&walls, &extra], p, 0.0, &mut rng, &mut a).unwrap();
+                    lidar.scan_indexed_into(&index, &extra, p, 0.0, &mut rng, &mut b).unwrap();
+                    let (ba, bb): (Vec<u64>, Vec<u64>) = (a.ranges.iter().map(|r| r.to_bits()).collect(), b.ranges.iter().map(|r| r.to_bits()).collect());
+                    assert_eq!(ba, bb, "pose {p:?} cell {cell} channels {channels}");
+                }
+            }
+        }
+    }
+}

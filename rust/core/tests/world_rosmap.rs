@@ -179,3 +179,22 @@ fn malformed_files_name_file_and_field() {
     let e = load_ros_map(d.join("nope.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
     assert!(e.contains("nope.yaml: file"), "{e}");
 }
+
+#[test]
+fn indexed_scan_equals_the_full_scan_on_real_maps() {
+    use shieldnav_core::world::SegmentIndex;
+    for (name, m) in all_maps(true) {
+        let walls = &m.scenario.map.segments;
+        let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range: 20.0, ..LidarConfig::default() }).unwrap();
+        let (mut a, mut b) = (Scan::default(), Scan::default());
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        let s = m.scenario.start;
+        for k in 0..6 {
+            let p = shieldnav_core::world::Pose2::new(s.x + 0.3 * k as f64, s.y - 0.2 * k as f64, 0.9 * k as f64);
+            lidar.scan_into(&[walls], p, 0.0, &mut rng, &mut a).unwrap();
+            lidar.scan_indexed_into(&index, &[], p, 0.0, &mut rng, &mut b).unwrap();
+            assert!(a.ranges.iter().zip(&b.ranges).all(|(x, y)| x.to_bits() == y.to_bits()), "{name} pose {k}");
+        }
+    }
+}

@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 mod errors;
 mod planner;
 mod shield;
+mod world;
 
 /// The native module.
 #[pymodule]
@@ -14,5 +15,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     shield::register(m)?;
     planner::register(m)?;
+    world::register(m)?;
     Ok(())
 }

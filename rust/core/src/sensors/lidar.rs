@@ -51,6 +51,9 @@ impl Default for LidarMount {
     }
 }
 
+/// The largest accepted `max_range` (m); an OS0 reaches about 50 m.
+pub const MAX_RANGE_LIMIT: Real = 200.0;
+
 /// LIDAR parameters. The default is a planar 1024-column ring at 10 Hz, range 0.1–20 m,
 /// 1 cm range noise, no dropout.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -108,8 +111,8 @@ impl LidarConfig {
         if !(self.min_range.is_finite() && self.min_range >= 0.0) {
             return Err(Error::invalid("min_range", format!("must be finite and >= 0, got {}", self.min_range)));
         }
-        if !(self.max_range.is_finite() && self.max_range > self.min_range) {
-            return Err(Error::invalid("max_range", format!("must be finite and > min_range, got {}", self.max_range)));
+        if !(self.max_range.is_finite() && self.max_range > self.min_range && self.max_range <= MAX_RANGE_LIMIT) {
+            return Err(Error::invalid("max_range", format!("must be > min_range and <= {MAX_RANGE_LIMIT} m, got {}", self.max_range)));
         }
         if !(self.range_noise_std.is_finite() && self.range_noise_std >= 0.0) {
             return Err(Error::invalid("range_noise_std", format!("must be finite and >= 0, got {}", self.range_noise_std)));
@@ -155,7 +158,7 @@ impl Scan {
 /// The LIDAR: configuration plus precomputed beam tables and scratch space.
 #[derive(Debug, Clone)]
 pub struct Lidar {
-    config: LidarConfig,
+    pub(super) config: LidarConfig,
     az_cos: Vec<Real>,
     az_sin: Vec<Real>,
     el_tan: Vec<Real>,
@@ -164,6 +167,8 @@ pub struct Lidar {
     el_sin: Vec<Real>,
     /// Walls in range, in the sensor frame: `(distance, a, b, height)`, nearest first.
     visible: Vec<(Real, [Real; 2], [Real; 2], Real)>,
+    /// Scratch of [`Lidar::scan_indexed_into`].
+    pub(super) indexed: super::lidar_indexed::IndexedScratch,
 }
 
 impl Lidar {
@@ -188,6 +193,7 @@ impl Lidar {
             el_cos: elev.iter().map(|e| e.cos()).collect(),
             el_sin: elev.iter().map(|e| e.sin()).collect(),
             visible: Vec::new(),
+            indexed: Default::default(),
         })
     }
 
@@ -228,7 +234,6 @@ impl Lidar {
         out.sensor_pose = sp;
         let (s, co) = sp.yaw.sin_cos();
         let zs = c.mount.z;
-        let inv_step = n as Real / std::f64::consts::TAU;
         let mut visible = std::mem::take(&mut self.visible);
         visible.clear();
         for slice in walls {
@@ -249,23 +254,39 @@ impl Lidar {
         // nearest first, so that occluded beams of farther walls are skipped by one compare
         visible.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
         for &(dmin, a, b, height) in &visible {
-            let fa = fast_atan2(a[1], a[0]);
-            let fb = fast_atan2(b[1], b[0]);
-            let cr = cross2(a, b);
-            let (start, span) = if cr > 0.0 {
-                (fa, (fb - fa).rem_euclid(std::f64::consts::TAU))
-            } else if cr < 0.0 {
-                (fb, (fa - fb).rem_euclid(std::f64::consts::TAU))
-            } else {
-                // collinear with the sensor: only the beams at the end points can hit
-                self.sweep(a, b, height, fa, 0.0, inv_step, zs, dmin, &mut out.ranges);
-                (fb, 0.0)
-            };
-            self.sweep(a, b, height, start, span, inv_step, zs, dmin, &mut out.ranges);
+            self.sweep_segment(a, b, height, dmin, zs, &mut out.ranges);
         }
         self.visible = visible;
         self.finish(rng, out);
         Ok(())
+    }
+
+    /// Sweeps one wall given in the sensor frame, `dmin` its distance from the sensor.
+    #[inline]
+    pub(super) fn sweep_segment(&self, a: [Real; 2], b: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
+        use std::f64::consts::TAU;
+        let inv_step = self.config.columns as Real / TAU;
+        let fa = fast_atan2(a[1], a[0]);
+        let fb = fast_atan2(b[1], b[0]);
+        let cr = cross2(a, b);
+        let ccw = |from: Real, to: Real| {
+            let d = to - from;
+            if d < 0.0 {
+                d + TAU
+            } else {
+                d
+            }
+        };
+        let (start, span) = if cr > 0.0 {
+            (fa, ccw(fa, fb))
+        } else if cr < 0.0 {
+            (fb, ccw(fb, fa))
+        } else {
+            // collinear with the sensor: only the beams at the end points can hit
+            self.sweep(a, b, height, fa, 0.0, inv_step, zs, dmin, best);
+            (fb, 0.0)
+        };
+        self.sweep(a, b, height, start, span, inv_step, zs, dmin, best);
     }
 
     /// Visits the beams of the angular interval `[start, start + span]` (with one beam of
@@ -333,7 +354,7 @@ impl Lidar {
     }
 
     /// Applies range limits, noise and dropout, and fills the body-frame points.
-    fn finish<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut Scan) {
+    pub(super) fn finish<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut Scan) {
         let c = &self.config;
         let n = c.columns;
         let (ms, mc) = c.mount.yaw.sin_cos();
@@ -370,17 +391,18 @@ impl Lidar {
 
 /// Distance from the origin to the segment `a b`.
 #[inline]
-fn seg_origin_distance(a: [Real; 2], b: [Real; 2]) -> Real {
+pub(super) fn seg_origin_distance(a: [Real; 2], b: [Real; 2]) -> Real {
     let e = [b[0] - a[0], b[1] - a[1]];
     let l2 = e[0] * e[0] + e[1] * e[1];
     let t = if l2 > 0.0 { (-(a[0] * e[0] + a[1] * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    (a[0] + t * e[0]).hypot(a[1] + t * e[1])
+    let (x, y) = (a[0] + t * e[0], a[1] + t * e[1]);
+    (x * x + y * y).sqrt()
 }
 
 /// `atan2` to about 1e-5 rad: only used to pick the beams to test, with a beam of margin
 /// (≥ 3e-3 rad at 2048 columns); the ranges themselves are exact.
 #[inline]
-fn fast_atan2(y: Real, x: Real) -> Real {
+pub(super) fn fast_atan2(y: Real, x: Real) -> Real {
     use std::f64::consts::{FRAC_PI_2, PI};
     let (ax, ay) = (x.abs(), y.abs());
     let (mn, mx) = if ax < ay { (ax, ay) } else { (ay, ax) };

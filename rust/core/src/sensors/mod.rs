@@ -4,6 +4,7 @@
 //! nominal controllers see, with drift and scheduled faults (the paper's Scenario 2).
 
 pub mod lidar;
+mod lidar_indexed;
 pub mod noise;
 pub mod odometry;
 mod ray_segment;

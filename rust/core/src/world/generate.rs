@@ -94,6 +94,9 @@ impl Corridor {
     }
 }
 
+/// A placed box: its rectangle (grid metres), height, and the cells it filled.
+type Furniture = ([Real; 4], Real, Vec<(usize, usize)>);
+
 struct Room {
     rect: [Real; 4],
     door: [Real; 4],
@@ -104,6 +107,15 @@ struct Room {
 pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     if !(cfg.resolution.is_finite() && cfg.resolution > 0.0 && cfg.resolution <= 0.1) {
         return Err(Error::invalid("resolution", format!("must be in (0, 0.1] m, got {}", cfg.resolution)));
+    }
+    if cfg.furniture > 1000 {
+        return Err(Error::invalid("furniture", format!("at most 1000 pieces, got {}", cfg.furniture)));
+    }
+    if !(cfg.margin.is_finite() && (0.0..=0.3).contains(&cfg.margin)) {
+        return Err(Error::invalid("margin", format!("must be in [0, 0.3] m, got {}", cfg.margin)));
+    }
+    if !(cfg.footprint.width.is_finite() && cfg.footprint.length.is_finite() && cfg.footprint.width > 0.0 && cfg.footprint.length >= cfg.footprint.width && cfg.footprint.width <= 0.8 && cfg.footprint.length <= 1.6) {
+        return Err(Error::invalid("footprint", format!("needs 0 < width <= length, width <= 0.8 m, length <= 1.6 m (corridors are 1.0-3.0 m), got {:?}", cfg.footprint)));
     }
     if !(cfg.wall_height.is_finite() && cfg.wall_height > 0.0) {
         return Err(Error::invalid("wall_height", format!("must be finite and > 0, got {}", cfg.wall_height)));
@@ -131,7 +143,7 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     }
     // walls come from the grid before furniture; furniture is separate polygons
     let walls_grid = grid.clone();
-    let mut furniture: Vec<([Real; 4], Real, Vec<(usize, usize)>)> = Vec::new();
+    let mut furniture: Vec<Furniture> = Vec::new();
     let corridor_count = corridors.len();
     for _ in 0..cfg.furniture {
         let c = corridors[rng.random_range(0..corridor_count)];

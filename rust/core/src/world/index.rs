@@ -93,6 +93,28 @@ impl SegmentIndex {
         &self.segments
     }
 
+    /// Bucket edge (m).
+    pub fn cell(&self) -> Real {
+        self.cell
+    }
+
+    /// World position of bucket `(0, 0)`'s lower-left corner.
+    pub fn origin(&self) -> Point2 {
+        self.origin
+    }
+
+    /// Buckets along x and y.
+    pub fn dims(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// Indices (into [`SegmentIndex::segments`]) of the walls in bucket `(i, j)`.
+    #[inline]
+    pub fn bucket(&self, i: usize, j: usize) -> &[u32] {
+        let b = j * self.nx + i;
+        &self.ids[self.starts[b] as usize..self.starts[b + 1] as usize]
+    }
+
     /// Replaces `out` with every wall in a bucket touched by the square around the disc of
     /// `radius` about `center` (a superset of the walls within `radius`), each once.
     pub fn query_into(&mut self, center: Point2, radius: Real, out: &mut Vec<Segment>) {

@@ -12,6 +12,7 @@ mod moving;
 pub mod preset;
 pub mod rosmap;
 mod scenario;
+mod sim;
 pub mod traverse;
 
 pub use geometry::{cross2, norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
@@ -21,5 +22,6 @@ pub use moving::{MovingObstacle, Trajectory};
 pub use preset::{preset, PRESET_NAMES};
 pub use rosmap::{load_ros_map, RosMap, RosMapOptions};
 pub use scenario::Scenario;
+pub use sim::{StepOutcome, World, WorldConfig};
 pub use grid::{Cell, OccupancyGrid};
 pub use traverse::{footprint_reachability, Footprint, Reachability};

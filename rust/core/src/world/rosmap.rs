@@ -92,10 +92,8 @@ pub fn parse_ros_yaml(text: &str, path: &Path) -> Result<RosMapMeta> {
             }
             "occupied_thresh" => occ = num(value, "occupied_thresh")?,
             "free_thresh" => free = num(value, "free_thresh")?,
-            "mode" => {
-                if !matches!(value, "trinary" | "scale") {
-                    return Err(Error::map_file(path, format!("line {line_no}, field mode"), format!("only `trinary` and `scale` are supported, got `{value}`")));
-                }
+            "mode" if !matches!(value, "trinary" | "scale") => {
+                return Err(Error::map_file(path, format!("line {line_no}, field mode"), format!("only `trinary` and `scale` are supported, got `{value}`")));
             }
             _ => {} // other map_server keys carry nothing we use
         }

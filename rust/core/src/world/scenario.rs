@@ -28,7 +28,11 @@ use super::geometry::{Polygon, Pose2, Segment};
 use super::map::StaticMap;
 use super::moving::MovingObstacle;
 use crate::error::{Error, Result};
+use crate::math::Real;
 use crate::sensors::OdometryConfig;
+
+/// How far from the origin (m) walls and the start may lie.
+pub const COORDINATE_LIMIT: Real = 1.0e5;
 
 /// Everything that defines an episode's world before any command is given.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -68,12 +72,20 @@ impl Scenario {
         Self { name: name.into(), map, start, goal: None, obstacles: Vec::new(), odometry: OdometryConfig::default() }
     }
 
-    /// Checks every part; the error names the part at fault.
+    /// Checks every part; the error names the part at fault. Coordinates must lie within
+    /// [`COORDINATE_LIMIT`] of the origin (the physics runs in `f32`).
     pub fn validate(&self) -> Result<()> {
+        let far = |p: [Real; 2]| p[0].abs() > COORDINATE_LIMIT || p[1].abs() > COORDINATE_LIMIT;
         for s in &self.map.segments {
             s.validate("walls")?;
+            if far(s.a) || far(s.b) {
+                return Err(Error::invalid("walls", format!("end points must be within {COORDINATE_LIMIT} m of the origin, got {s:?}")));
+            }
         }
         self.start.validate("start")?;
+        if far([self.start.x, self.start.y]) {
+            return Err(Error::invalid("start", format!("must be within {COORDINATE_LIMIT} m of the origin, got {:?}", self.start)));
+        }
         if let Some(g) = &self.goal {
             g.validate("goal")?;
         }
@@ -156,6 +168,12 @@ mod tests {
                        "start": {"x": 0, "y": 0, "yaw": 0}}"#;
         let err = Scenario::from_json_str(text, "w.json").unwrap_err().to_string();
         assert!(err.contains("w.json: walls[1]"), "{err}");
+    }
+
+    #[test]
+    fn far_away_start_is_an_error() {
+        let text = r#"{"walls": [], "start": {"x": 1e9, "y": 0, "yaw": 0}}"#;
+        assert!(Scenario::from_json_str(text, "f.json").unwrap_err().to_string().contains("start"));
     }
 
     #[test]

@@ -1,0 +1,34 @@
+//! One physics step: the robot, the preset's walls and three moving obstacles.
+//!
+//! `cargo bench -p shieldnav-core --bench physics`
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use shieldnav_core::robot::{PhysicsScene, RobotShape};
+use shieldnav_core::world::{preset, MovingObstacle, Polygon, Pose2, Trajectory};
+
+fn bench(c: &mut Criterion) {
+    let s = preset("dynamic_obstacles").unwrap();
+    let mut obstacles = s.obstacles.clone();
+    obstacles.push(MovingObstacle {
+        name: "pedestrian".into(),
+        shape: Polygon::rect(-0.2, -0.25, 0.2, 0.25, 1.8),
+        trajectory: Trajectory::walk(&[[25.0, 0.3], [2.0, 0.3]], 1.2, 0.0).unwrap(),
+    });
+    let mut scene = PhysicsScene::new(RobotShape::default(), &s.map.segments, &obstacles, s.start, 0.0).unwrap();
+    let mut t = 0.0;
+    c.bench_function(&format!("physics_step_robot_{}walls_{}movers", s.map.segments.len(), obstacles.len()), |b| {
+        b.iter(|| {
+            t += 0.02;
+            if t > 30.0 {
+                t = 0.0;
+                scene.set_robot_pose(Pose2::new(1.0, 0.0, 0.0)).unwrap();
+            }
+            black_box(scene.step(black_box([0.5, 0.0, 0.05]), 0.02, &obstacles, t).unwrap());
+        })
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,176 @@
+//! The LIDAR on big maps: walls fetched bucket by bucket from a [`SegmentIndex`], nearest
+//! buckets first, and a planar scan skips every bucket whose beams all already hit something
+//! nearer than the bucket (occlusion culling by angular sectors). Same ranges as
+//! [`Lidar::scan_into`] over all walls: culling only skips walls that cannot be seen.
+
+use rand::Rng;
+
+use super::lidar::{fast_atan2, seg_origin_distance, Lidar, Scan};
+use crate::error::Result;
+use crate::math::Real;
+use crate::world::{Pose2, Segment, SegmentIndex};
+
+/// Beams per occlusion sector.
+const SECTOR: usize = 16;
+
+/// Reusable buffers of the indexed scan.
+#[derive(Debug, Clone, Default)]
+pub(super) struct IndexedScratch {
+    /// Bucket offsets `(di, dj)` sorted by a lower bound of their distance, for `key`.
+    offsets: Vec<(i32, i32)>,
+    key: (u64, u64, i32),
+    /// Per wall: the scan number in which it was swept.
+    seen: Vec<u32>,
+    epoch: u32,
+    /// Upper bound of the beam ranges in each sector.
+    sector_max: Vec<Real>,
+}
+
+impl Lidar {
+    /// Scans the walls of `index` plus `extra` (moving obstacles, few) from a robot at `body`.
+    /// Ranges are identical to [`Lidar::scan_into`] over the same walls.
+    pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
+        body.validate("pose")?;
+        let c = self.config;
+        let (n, kch) = (c.columns, c.channels);
+        out.channels = kch;
+        out.columns = n;
+        out.stamp = stamp;
+        out.ranges.clear();
+        out.ranges.resize(n * kch, Real::INFINITY);
+        let sp = self.sensor_pose(body);
+        out.sensor_pose = sp;
+        let (s, co) = sp.yaw.sin_cos();
+        let to_sensor = |p: [Real; 2]| {
+            let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
+            [co * dx + s * dy, -s * dx + co * dy]
+        };
+        let zs = c.mount.z;
+        let planar = kch == 1;
+        let mut scratch = std::mem::take(&mut self.indexed);
+        for seg in extra {
+            let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));
+            let d = seg_origin_distance(a, b);
+            if d <= c.max_range && !(planar && zs > seg.height) {
+                self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
+            }
+        }
+        let cell = index.cell();
+        let (nx, ny) = index.dims();
+        // offsets beyond the index's extent are never inside it
+        let r = ((c.max_range / cell).ceil() + 1.0).min(nx.max(ny) as Real) as i32;
+        let key = (cell.to_bits(), c.max_range.to_bits(), r);
+        if scratch.key != key || scratch.offsets.is_empty() {
+            let lb = |d: i32| ((d.abs() - 1).max(0) as Real) * cell;
+            let mut offs: Vec<(Real, i32, i32)> = Vec::new();
+            for dj in -r..=r {
+                for di in -r..=r {
+                    let l = lb(di).hypot(lb(dj));
+                    if l <= c.max_range {
+                        offs.push((l, di, dj));
+                    }
+                }
+            }
+            offs.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+            scratch.offsets = offs.into_iter().map(|(_, i, j)| (i, j)).collect();
+            scratch.key = key;
+        }
+        let nseg = index.segments().len();
+        if scratch.seen.len() != nseg {
+            scratch.seen = vec![0; nseg];
+            scratch.epoch = 0;
+        }
+        scratch.epoch = scratch.epoch.wrapping_add(1);
+        if scratch.epoch == 0 {
+            scratch.seen.iter_mut().for_each(|v| *v = 0);
+            scratch.epoch = 1;
+        }
+        let sectors = n / SECTOR;
+        scratch.sector_max.clear();
+        scratch.sector_max.resize(sectors, Real::INFINITY);
+        let refresh = |sm: &mut [Real], best: &[Real], k0: i64, k1: i64| {
+            for k in k0..=k1 {
+                let q = k.rem_euclid(sectors as i64) as usize;
+                sm[q] = best[q * SECTOR..(q + 1) * SECTOR].iter().copied().fold(0.0, Real::max);
+            }
+        };
+        if !extra.is_empty() && planar {
+            refresh(&mut scratch.sector_max, &out.ranges, 0, sectors as i64 - 1);
+        }
+        let origin = index.origin();
+        let ci = ((sp.x - origin[0]) / cell).floor() as i64;
+        let cj = ((sp.y - origin[1]) / cell).floor() as i64;
+        let inv_step = n as Real / std::f64::consts::TAU;
+        let segments = index.segments();
+        for &(di, dj) in &scratch.offsets {
+            let (i, j) = (ci + di as i64, cj + dj as i64);
+            if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
+                continue;
+            }
+            let ids = index.bucket(i as usize, j as usize);
+            if ids.is_empty() {
+                continue;
+            }
+            let x0 = origin[0] + i as Real * cell;
+            let y0 = origin[1] + j as Real * cell;
+            let (x1, y1) = (x0 + cell, y0 + cell);
+            let ddx = (x0 - sp.x).max(0.0).max(sp.x - x1);
+            let ddy = (y0 - sp.y).max(0.0).max(sp.y - y1);
+            let dmin_b = (ddx * ddx + ddy * ddy).sqrt();
+            if dmin_b > c.max_range {
+                continue;
+            }
+            // angular interval of the bucket, as sector indices (only away from the sensor)
+            let mut span: Option<(i64, i64)> = None;
+            if planar && dmin_b > 0.5 * cell {
+                let ctr = to_sensor([0.5 * (x0 + x1), 0.5 * (y0 + y1)]);
+                let tc = fast_atan2(ctr[1], ctr[0]);
+                let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
+                for p in [[x0, y0], [x1, y0], [x1, y1], [x0, y1]] {
+                    let q = to_sensor(p);
+                    let mut d = fast_atan2(q[1], q[0]) - tc;
+                    if d > std::f64::consts::PI {
+                        d -= std::f64::consts::TAU;
+                    } else if d < -std::f64::consts::PI {
+                        d += std::f64::consts::TAU;
+                    }
+                    lo = lo.min(d);
+                    hi = hi.max(d);
+                }
+                let j0 = ((tc + lo) * inv_step).floor() as i64 - 1;
+                let j1 = ((tc + hi) * inv_step).ceil() as i64 + 1;
+                let (k0, k1) = (j0.div_euclid(SECTOR as i64), j1.div_euclid(SECTOR as i64));
+                let occluded = (k0..=k1).all(|k| scratch.sector_max[k.rem_euclid(sectors as i64) as usize] <= dmin_b);
+                if occluded {
+                    continue;
+                }
+                span = Some((k0, k1));
+            }
+            for &id in ids {
+                let st = &mut scratch.seen[id as usize];
+                if *st == scratch.epoch {
+                    continue;
+                }
+                *st = scratch.epoch;
+                let seg = &segments[id as usize];
+                if planar && zs > seg.height {
+                    continue;
+                }
+                let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));
+                let d = seg_origin_distance(a, b);
+                if d <= c.max_range {
+                    self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
+                }
+            }
+            if planar {
+                match span {
+                    Some((k0, k1)) => refresh(&mut scratch.sector_max, &out.ranges, k0, k1.min(k0 + sectors as i64 - 1)),
+                    None => refresh(&mut scratch.sector_max, &out.ranges, 0, sectors as i64 - 1),
+                }
+            }
+        }
+        self.indexed = scratch;
+        self.finish(rng, out);
+        Ok(())
+    }
+}

@@ -1,0 +1,209 @@
+//! One running world: the scenario's walls and scripted obstacles, the robot body and tracker,
+//! the LIDAR (looking from the true pose) and the odometry (what planners see), all driven by
+//! one seeded RNG.
+//!
+//! ```
+//! use shieldnav_core::world::{World, WorldConfig};
+//! let mut w = World::from_preset("dynamic_obstacles", WorldConfig::default()).unwrap();
+//! let out = w.step([0.5, 0.0, 0.0]).unwrap();
+//! assert!(out.true_pose.x > 1.0 && !out.contacts.any());
+//! assert_eq!(w.scan().ranges.len(), 1024);
+//! ```
+
+use std::path::Path;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::generate::{generate, GeneratorConfig};
+use super::geometry::{Pose2, Segment};
+use super::index::SegmentIndex;
+use super::preset::preset;
+use super::rosmap::{load_ros_map, RosMapOptions};
+use super::scenario::Scenario;
+use crate::error::{Error, Result};
+use crate::math::Real;
+use crate::robot::{ContactReport, PhysicsScene, RobotShape, Tracker, TrackerConfig};
+use crate::sensors::{Lidar, LidarConfig, Odometry, Scan};
+
+/// Everything about a world that is not the scenario.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorldConfig {
+    /// The robot's true footprint.
+    pub robot: RobotShape,
+    /// Its low-level tracker.
+    pub tracker: TrackerConfig,
+    /// The LIDAR.
+    pub lidar: LidarConfig,
+    /// Control period (s): one [`World::step`].
+    pub dt: Real,
+    /// Seed of the world's RNG (LIDAR noise and dropout, odometry noise).
+    pub seed: u64,
+}
+
+impl Default for WorldConfig {
+    fn default() -> Self {
+        Self { robot: RobotShape::default(), tracker: TrackerConfig::default(), lidar: LidarConfig::default(), dt: 0.02, seed: 0 }
+    }
+}
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepOutcome {
+    /// World time after the step (s).
+    pub time: Real,
+    /// The robot's true pose.
+    pub true_pose: Pose2,
+    /// The odometry estimate.
+    pub estimated_pose: Pose2,
+    /// The robot's body-frame velocity from the tracker `(vx, vy, ω)`.
+    pub velocity: [Real; 3],
+    /// Contacts of the true footprint after the step.
+    pub contacts: ContactReport,
+    /// Whether a new LIDAR scan was taken in this step.
+    pub scanned: bool,
+    /// Whether the command exceeded the tracker's limits.
+    pub saturated: bool,
+}
+
+/// A running world.
+#[derive(Debug)]
+pub struct World {
+    scenario: Scenario,
+    config: WorldConfig,
+    physics: PhysicsScene,
+    tracker: Tracker,
+    lidar: Lidar,
+    odometry: Odometry,
+    rng: ChaCha8Rng,
+    time: Real,
+    next_scan: Real,
+    scan: Scan,
+    index: SegmentIndex,
+    moving: Vec<Segment>,
+    contacts: ContactReport,
+}
+
+impl World {
+    /// Builds a world from a scenario.
+    pub fn new(scenario: Scenario, config: WorldConfig) -> Result<Self> {
+        scenario.validate()?;
+        if !(config.dt.is_finite() && config.dt > 0.0 && config.dt <= 0.1) {
+            return Err(Error::invalid("dt", format!("must be in (0, 0.1] s, got {}", config.dt)));
+        }
+        let lidar = Lidar::new(config.lidar)?;
+        let tracker = Tracker::new(config.tracker)?;
+        let physics = PhysicsScene::new(config.robot, &scenario.map.segments, &scenario.obstacles, scenario.start, 0.0)?;
+        let odometry = Odometry::new(scenario.odometry.clone(), scenario.start, 0.0)?;
+        let index = SegmentIndex::new(scenario.map.segments.clone(), 2.0)?;
+        let mut w = Self {
+            scenario,
+            config,
+            physics,
+            tracker,
+            lidar,
+            odometry,
+            rng: ChaCha8Rng::seed_from_u64(config.seed),
+            time: 0.0,
+            next_scan: 0.0,
+            scan: Scan::default(),
+            index,
+            moving: Vec::new(),
+            contacts: ContactReport::default(),
+        };
+        w.take_scan()?;
+        Ok(w)
+    }
+
+    /// A world of the named preset (see [`super::preset`]).
+    pub fn from_preset(name: &str, config: WorldConfig) -> Result<Self> {
+        Self::new(preset(name)?, config)
+    }
+
+    /// A world of the procedural site of `site_seed`.
+    pub fn from_procedural(site_seed: u64, generator: &GeneratorConfig, config: WorldConfig) -> Result<Self> {
+        Self::new(generate(site_seed, generator)?.scenario, config)
+    }
+
+    /// A world of a ROS map_server map, starting at its interior start.
+    pub fn from_ros_map(yaml: impl AsRef<Path>, options: &RosMapOptions, config: WorldConfig) -> Result<Self> {
+        Self::new(load_ros_map(yaml, options)?.scenario, config)
+    }
+
+    /// A world of a JSON scenario file (see [`Scenario`]).
+    pub fn from_scenario_file(path: impl AsRef<Path>, config: WorldConfig) -> Result<Self> {
+        Self::new(Scenario::from_json_file(path)?, config)
+    }
+
+    fn take_scan(&mut self) -> Result<()> {
+        let pose = self.physics.robot_pose();
+        self.moving.clear();
+        for o in &self.scenario.obstacles {
+            o.segments_at(self.time, &mut self.moving);
+        }
+        self.lidar.scan_indexed_into(&self.index, &self.moving, pose, self.time, &mut self.rng, &mut self.scan)?;
+        self.next_scan += self.lidar.period();
+        Ok(())
+    }
+
+    /// Advances one control period with the body-frame command `(vx, vy, ω)` (m/s, m/s,
+    /// rad/s). A scan is taken whenever the LIDAR's period has elapsed.
+    pub fn step(&mut self, command: [Real; 3]) -> Result<StepOutcome> {
+        let dt = self.config.dt;
+        let tr = self.tracker.step(command, dt)?;
+        let t_next = self.time + dt;
+        self.contacts = self.physics.step(tr.velocity, dt, &self.scenario.obstacles, t_next)?;
+        self.time = t_next;
+        let true_pose = self.physics.robot_pose();
+        let estimated_pose = self.odometry.update(self.time, true_pose, &mut self.rng);
+        let scanned = self.time >= self.next_scan - 1e-9;
+        if scanned {
+            self.take_scan()?;
+        }
+        Ok(StepOutcome { time: self.time, true_pose, estimated_pose, velocity: tr.velocity, contacts: self.contacts, scanned, saturated: tr.saturated })
+    }
+
+    /// The latest scan.
+    pub fn scan(&self) -> &Scan {
+        &self.scan
+    }
+
+    /// World time (s).
+    pub fn time(&self) -> Real {
+        self.time
+    }
+
+    /// The robot's true pose.
+    pub fn true_pose(&self) -> Pose2 {
+        self.physics.robot_pose()
+    }
+
+    /// The odometry estimate.
+    pub fn estimated_pose(&self) -> Pose2 {
+        self.odometry.estimate()
+    }
+
+    /// Contacts after the last step.
+    pub fn contacts(&self) -> ContactReport {
+        self.contacts
+    }
+
+    /// The scenario.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &WorldConfig {
+        &self.config
+    }
+
+    /// Every wall now: static walls and the moving obstacles' outlines at the current time.
+    pub fn walls_now(&self) -> Vec<Segment> {
+        let mut v = self.scenario.map.segments.clone();
+        for o in &self.scenario.obstacles {
+            o.segments_at(self.time, &mut v);
+        }
+        v
+    }
+}

@@ -1,0 +1,104 @@
+//! The running world: determinism, scan timing, odometry faults, moving obstacles, contacts.
+
+use shieldnav_core::robot::footprint_segment_distance;
+use shieldnav_core::sensors::LidarConfig;
+use shieldnav_core::world::{World, WorldConfig};
+
+fn noisy(seed: u64) -> WorldConfig {
+    let mut c = WorldConfig { seed, ..Default::default() };
+    c.lidar.dropout = 0.05;
+    c
+}
+
+fn run(world: &mut World, steps: usize, cmd: [f64; 3]) -> Vec<u64> {
+    let mut trace = Vec::new();
+    for _ in 0..steps {
+        let o = world.step(cmd).unwrap();
+        trace.extend([o.true_pose.x, o.true_pose.y, o.true_pose.yaw, o.estimated_pose.x].map(f64::to_bits));
+        if o.scanned {
+            trace.extend(world.scan().ranges.iter().map(|r| r.to_bits()));
+        }
+    }
+    trace
+}
+
+#[test]
+fn same_seed_same_trajectory_and_scans_bit_for_bit_other_seed_differs() {
+    let mut scenario = shieldnav_core::world::preset("dynamic_obstacles").unwrap();
+    scenario.odometry.translation_noise = 0.02;
+    let mk = |seed| World::new(scenario.clone(), noisy(seed)).unwrap();
+    let (mut a, mut b, mut c) = (mk(3), mk(3), mk(4));
+    let (ta, tb, tc) = (run(&mut a, 200, [0.6, 0.0, 0.1]), run(&mut b, 200, [0.6, 0.0, 0.1]), run(&mut c, 200, [0.6, 0.0, 0.1]));
+    assert_eq!(ta, tb);
+    assert_ne!(ta, tc);
+}
+
+#[test]
+fn scans_come_at_the_lidar_rate_not_the_control_rate() {
+    let cfg = WorldConfig { lidar: LidarConfig { rate_hz: 20.0, ..Default::default() }, dt: 0.01, ..Default::default() };
+    let mut w = World::from_preset("constricted_passage", cfg).unwrap();
+    let scans = (0..100).filter(|_| w.step([0.0, 0.0, 0.0]).unwrap().scanned).count();
+    assert_eq!(scans, 20); // 1 s at 20 Hz
+}
+
+#[test]
+fn odometry_jump_moves_the_estimate_not_the_lidar() {
+    let mut w = World::from_preset("odometry_jump", WorldConfig { lidar: LidarConfig { range_noise_std: 0.0, ..Default::default() }, ..Default::default() }).unwrap();
+    let mut before = None;
+    for _ in 0..1100 {
+        let o = w.step([0.5, 0.0, 0.0]).unwrap();
+        if (o.time - 19.9).abs() < 1e-9 {
+            before = Some((o, w.scan().ranges.clone()));
+        }
+    }
+    let (b, ranges_before) = before.unwrap();
+    assert!((b.estimated_pose.x - b.true_pose.x).abs() < 1e-6);
+    let t = w.true_pose();
+    let e = w.estimated_pose();
+    assert!((e.x - t.x - 120.0).abs() < 1e-6, "true {t:?} est {e:?}");
+    // the LIDAR still sees the corridor walls 1.2 m to each side of the true pose
+    let n = ranges_before.len();
+    for r in [&ranges_before, &w.scan().ranges] {
+        assert!((r[n / 4] - 1.2).abs() < 0.02 || r[n / 4] > 1.2, "left {}", r[n / 4]);
+        assert!((r[3 * n / 4] - 1.2).abs() < 0.02 || r[3 * n / 4] > 1.2);
+    }
+}
+
+#[test]
+fn pushed_chair_and_opening_door_appear_in_the_scan() {
+    let cfg = WorldConfig { lidar: LidarConfig { range_noise_std: 0.0, ..Default::default() }, ..Default::default() };
+    let mut w = World::from_preset("dynamic_obstacles", cfg).unwrap();
+    // the robot waits at x = 1 facing +x; beam 0 looks down the corridor
+    let mut ahead = Vec::new();
+    for _ in 0..(24.0 / 0.02) as usize {
+        let o = w.step([0.0, 0.0, 0.0]).unwrap();
+        if o.scanned {
+            ahead.push((o.time, w.scan().ranges[0]));
+        }
+    }
+    let at = |t: f64| ahead.iter().find(|(s, _)| (*s - t).abs() < 0.051).unwrap().1;
+    // chair (0.5 m box) slides from x = 13 to 10.5 at y 0.5 -> 0.15 between 9 and 11 s:
+    // beam 0 (y = 0) hits it once it crosses y = 0.25
+    assert!(at(8.0) > 9.0, "{}", at(8.0));
+    assert!((at(12.0) - (10.5 - 0.25 * 2f64.sqrt() * (0.3f64 + std::f64::consts::FRAC_PI_4).cos() - 1.0 - 0.0)).abs() < 0.3, "{}", at(12.0));
+    assert!(at(12.0) < 9.6);
+}
+
+#[test]
+fn driving_into_the_cabinet_is_a_contact_judged_on_the_footprint() {
+    let cfg = WorldConfig { lidar: LidarConfig { range_noise_std: 0.0, ..Default::default() }, ..Default::default() };
+    let mut w = World::from_preset("constricted_passage", cfg).unwrap();
+    // from (1, 0) head diagonally up-right into the cabinet at x in [4.2, 5], y >= 0.3
+    let mut first_contact = None;
+    for k in 0..600 {
+        let o = w.step([1.0, 0.2, 0.0]).unwrap();
+        let exact = w.walls_now().iter().map(|s| footprint_segment_distance(&w.config().robot, o.true_pose, s)).fold(f64::INFINITY, f64::min);
+        if o.contacts.any() {
+            assert!(exact < 2e-3, "step {k}: rapier contact but the footprint is {exact} m clear");
+            first_contact.get_or_insert(k);
+        } else {
+            assert!(exact > 0.0, "step {k}: footprint touches a wall, no contact reported");
+        }
+    }
+    assert!(first_contact.is_some(), "never reached the cabinet");
+}

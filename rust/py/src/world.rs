@@ -1,0 +1,196 @@
+//! `shieldnav._core.World`: build a world (preset, procedural site, ROS map or scenario file),
+//! step it with a body-frame command, read the LIDAR, poses and contacts as numpy arrays.
+//! Each method converts, calls `shieldnav_core::world::World`, and maps errors; nothing here
+//! computes.
+
+use std::path::PathBuf;
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use shieldnav_core::robot::{RobotShape, TrackerConfig};
+use shieldnav_core::sensors::{LidarConfig, LidarMount};
+use shieldnav_core::world::generate::{GeneratorConfig, SiteKind};
+use shieldnav_core::world::{Pose2, RosMapOptions, World, WorldConfig};
+
+use crate::errors::{to_py, InvalidArgumentError};
+
+fn pose_array<'py>(py: Python<'py>, p: Pose2) -> Bound<'py, PyArray1<f64>> {
+    vec![p.x, p.y, p.yaw].into_pyarray(py)
+}
+
+/// A simulated corridor world: walls, scripted obstacles, the robot's rapier body and
+/// tracker, an exact LIDAR (seen from the true pose) and a faulty odometry.
+///
+/// Build from exactly one of `preset` (name), `procedural` (site seed; `kind` "office" or
+/// "tunnel"), `ros_map` (map_server YAML path) or `scenario` (JSON path). `seed` seeds every
+/// random draw (LIDAR noise and dropout, odometry noise).
+#[pyclass(name = "World", module = "shieldnav._core")]
+pub struct PyWorld {
+    inner: World,
+}
+
+#[pymethods]
+impl PyWorld {
+    #[new]
+    #[pyo3(signature = (*, preset=None, procedural=None, kind="office", ros_map=None, scenario=None, seed=0, dt=0.02,
+        channels=1, columns=1024, min_range=0.1, max_range=20.0, range_noise_std=0.01, dropout=0.0, rate_hz=10.0,
+        vertical_fov=(-std::f64::consts::FRAC_PI_4, std::f64::consts::FRAC_PI_4), mount=(0.0, 0.0, 0.5, 0.0),
+        robot_length=1.1, robot_width=0.5, corner_radius=0.0, unknown_is_wall=true))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        preset: Option<String>,
+        procedural: Option<u64>,
+        kind: &str,
+        ros_map: Option<PathBuf>,
+        scenario: Option<PathBuf>,
+        seed: u64,
+        dt: f64,
+        channels: usize,
+        columns: usize,
+        min_range: f64,
+        max_range: f64,
+        range_noise_std: f64,
+        dropout: f64,
+        rate_hz: f64,
+        vertical_fov: (f64, f64),
+        mount: (f64, f64, f64, f64),
+        robot_length: f64,
+        robot_width: f64,
+        corner_radius: f64,
+        unknown_is_wall: bool,
+    ) -> PyResult<Self> {
+        let sources = preset.is_some() as u8 + procedural.is_some() as u8 + ros_map.is_some() as u8 + scenario.is_some() as u8;
+        if sources != 1 {
+            return Err(InvalidArgumentError::new_err(format!("give exactly one of preset, procedural, ros_map, scenario (got {sources})")));
+        }
+        let kind = match kind {
+            "office" => SiteKind::Office,
+            "tunnel" => SiteKind::Tunnel,
+            other => return Err(InvalidArgumentError::new_err(format!("invalid `kind`: expected \"office\" or \"tunnel\", got {other:?}"))),
+        };
+        let lidar = LidarConfig {
+            channels,
+            columns,
+            vertical_fov,
+            min_range,
+            max_range,
+            range_noise_std,
+            dropout,
+            rate_hz,
+            mount: LidarMount { x: mount.0, y: mount.1, z: mount.2, yaw: mount.3 },
+        };
+        let config = WorldConfig { robot: RobotShape { length: robot_length, width: robot_width, corner_radius }, tracker: TrackerConfig::default(), lidar, dt, seed };
+        let world = py
+            .detach(move || {
+                if let Some(name) = preset {
+                    World::from_preset(&name, config)
+                } else if let Some(site) = procedural {
+                    World::from_procedural(site, &GeneratorConfig { kind, ..Default::default() }, config)
+                } else if let Some(path) = ros_map {
+                    World::from_ros_map(path, &RosMapOptions { unknown_is_wall, ..Default::default() }, config)
+                } else {
+                    World::from_scenario_file(scenario.unwrap_or_default(), config)
+                }
+            })
+            .map_err(to_py)?;
+        Ok(Self { inner: world })
+    }
+
+    /// Advances one control period with the body-frame command (m/s, m/s, rad/s). Returns a
+    /// dict: time, scanned, saturated, contact_count, max_penetration.
+    fn step<'py>(&mut self, py: Python<'py>, vx: f64, vy: f64, wz: f64) -> PyResult<Bound<'py, PyDict>> {
+        let inner = &mut self.inner;
+        let out = py.detach(move || inner.step([vx, vy, wz])).map_err(to_py)?;
+        let d = PyDict::new(py);
+        d.set_item("time", out.time)?;
+        d.set_item("scanned", out.scanned)?;
+        d.set_item("saturated", out.saturated)?;
+        d.set_item("contact_count", out.contacts.count)?;
+        d.set_item("max_penetration", out.contacts.max_penetration)?;
+        Ok(d)
+    }
+
+    /// World time (s).
+    #[getter]
+    fn time(&self) -> f64 {
+        self.inner.time()
+    }
+
+    /// Latest ranges, shape (channels, columns), m; `inf` where there is no return.
+    #[getter]
+    fn ranges<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let s = self.inner.scan();
+        let a = Array2::from_shape_vec((s.channels, s.columns), s.ranges.clone()).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        Ok(a.into_pyarray(py))
+    }
+
+    /// Latest body-frame points, shape (channels * columns, 3), m; NaN rows where there is no
+    /// return.
+    #[getter]
+    fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let s = self.inner.scan();
+        let flat: Vec<f64> = s.points.iter().flatten().copied().collect();
+        let a = Array2::from_shape_vec((s.points.len(), 3), flat).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        Ok(a.into_pyarray(py))
+    }
+
+    /// Time (s) of the latest scan.
+    #[getter]
+    fn scan_time(&self) -> f64 {
+        self.inner.scan().stamp
+    }
+
+    /// The sensor's true planar pose `[x, y, yaw]` when the latest scan was taken.
+    #[getter]
+    fn sensor_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        pose_array(py, self.inner.scan().sensor_pose)
+    }
+
+    /// The robot's true pose `[x, y, yaw]`.
+    #[getter]
+    fn true_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        pose_array(py, self.inner.true_pose())
+    }
+
+    /// The odometry estimate `[x, y, yaw]`.
+    #[getter]
+    fn estimated_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        pose_array(py, self.inner.estimated_pose())
+    }
+
+    /// Contacts after the last step: `[count, with_walls, with_obstacles, max_penetration]`.
+    #[getter]
+    fn contacts<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let c = self.inner.contacts();
+        vec![c.count as f64, c.with_walls as f64, c.with_obstacles as f64, c.max_penetration].into_pyarray(py)
+    }
+
+    /// Every wall now (static and moving obstacles), shape (M, 5): `ax, ay, bx, by, height`.
+    #[getter]
+    fn walls<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let w = self.inner.walls_now();
+        let flat: Vec<f64> = w.iter().flat_map(|s| [s.a[0], s.a[1], s.b[0], s.b[1], s.height]).collect();
+        let a = Array2::from_shape_vec((w.len(), 5), flat).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        Ok(a.into_pyarray(py))
+    }
+
+    /// The scenario's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.scenario().name.clone()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("World(name={:?}, time={:.3}, walls={})", self.inner.scenario().name, self.inner.time(), self.inner.scenario().map.segments.len())
+    }
+}
+
+/// Adds the world classes to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyWorld>()?;
+    Ok(())
+}

@@ -1,0 +1,150 @@
+"""shieldnav.World: LIDAR against an independent numpy ray caster, poses, contacts, errors."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from shieldnav import World
+
+MAPS = Path(__file__).resolve().parents[1].parent / "shared" / "maps"
+
+
+def numpy_ranges(walls, sensor_pose, columns, channels=1, fov=(-np.pi / 4, np.pi / 4), z=0.5, rmin=0.1, rmax=20.0):
+    """Brute-force f64 ray caster: every beam against every wall, (channels, columns)."""
+    x, y, yaw = sensor_pose
+    az = yaw + 2.0 * np.pi * np.arange(columns) / columns
+    d = np.stack([np.cos(az), np.sin(az)], axis=1)[:, None, :]  # (N, 1, 2)
+    a, b, h = walls[None, :, 0:2], walls[None, :, 2:4], walls[None, :, 4]
+    e = b - a
+    w = a - np.array([x, y])
+    den = d[..., 0] * e[..., 1] - d[..., 1] * e[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * e[..., 1] - w[..., 1] * e[..., 0]) / den
+        s = (w[..., 0] * d[..., 1] - w[..., 1] * d[..., 0]) / den
+    hit = (den != 0) & (t >= 0) & (s >= 0) & (s <= 1)
+    t = np.where(hit, t, np.inf)
+    elev = np.array([0.0]) if channels == 1 else np.linspace(fov[0], fov[1], channels)
+    out = np.empty((channels, columns))
+    for k, el in enumerate(elev):
+        zk = z + np.where(hit, t, 0.0) * np.tan(el)
+        ok = hit & (zk >= 0) & (zk <= h)
+        r = np.where(ok, t / np.cos(el), np.inf).min(axis=1)
+        out[k] = np.where((r >= rmin) & (r <= rmax), r, np.inf)
+    return out
+
+
+def assert_scan_matches(world, **kw):
+    ref = numpy_ranges(world.walls, world.sensor_pose, **kw)
+    got = world.ranges
+    assert got.shape == ref.shape
+    both = np.isfinite(got) | np.isfinite(ref)
+    assert both.sum() > 0.5 * got.size
+    np.testing.assert_array_equal(np.isfinite(got), np.isfinite(ref))
+    np.testing.assert_allclose(got[np.isfinite(got)], ref[np.isfinite(ref)], rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["constricted_passage", "odometry_jump", "dynamic_obstacles"])
+def test_planar_scan_matches_numpy_on_presets(name):
+    w = World(preset=name, range_noise_std=0.0)
+    assert w.name == name
+    assert_scan_matches(w, columns=1024)
+    for _ in range(30):
+        if w.step(0.4, 0.0, 0.2)["scanned"]:
+            assert_scan_matches(w, columns=1024)
+
+
+@pytest.mark.parametrize("kind", ["office", "tunnel"])
+def test_planar_scan_matches_numpy_on_procedural_sites(kind):
+    w = World(procedural=5, kind=kind, range_noise_std=0.0, columns=2048)
+    assert_scan_matches(w, columns=2048)
+
+
+def test_three_d_scan_matches_numpy():
+    w = World(preset="dynamic_obstacles", range_noise_std=0.0, channels=16)
+    assert_scan_matches(w, columns=1024, channels=16)
+
+
+@pytest.mark.skipif(not MAPS.is_dir(), reason=f"{MAPS} absent (shared maps beside the repository)")
+@pytest.mark.parametrize("yaml", sorted(str(p) for p in MAPS.glob("*/*.yaml")) if MAPS.is_dir() else [])
+def test_real_maps_load_and_scan_matches_numpy(yaml):
+    w = World(ros_map=yaml, range_noise_std=0.0, max_range=10.0)
+    assert_scan_matches(w, columns=1024, rmax=10.0)
+
+
+def test_points_are_ranges_in_the_body_frame():
+    w = World(preset="constricted_passage", range_noise_std=0.0, mount=(0.2, 0.0, 0.6, 0.0))
+    r = w.ranges[0]
+    p = w.points
+    assert p.shape == (1024, 3)
+    az = 2.0 * np.pi * np.arange(1024) / 1024
+    ok = np.isfinite(r)
+    np.testing.assert_allclose(p[ok, 0], 0.2 + r[ok] * np.cos(az[ok]), atol=1e-12)
+    np.testing.assert_allclose(p[ok, 1], r[ok] * np.sin(az[ok]), atol=1e-12)
+    np.testing.assert_allclose(p[ok, 2], 0.6)
+    assert np.isnan(p[~ok]).all()
+
+
+def test_same_seed_same_run_other_seed_differs():
+    def run(seed):
+        w = World(preset="dynamic_obstacles", seed=seed, dropout=0.05)
+        out = []
+        for _ in range(60):
+            w.step(0.5, 0.0, 0.05)
+            out.append(np.concatenate([w.true_pose, w.ranges.ravel()]))
+        return np.array(out)
+
+    a, b, c = run(1), run(1), run(2)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+def test_odometry_jump_moves_the_estimate_only():
+    w = World(preset="odometry_jump", range_noise_std=0.0)
+    for _ in range(int(20.5 / 0.02)):
+        w.step(0.5, 0.0, 0.0)
+    t, e = w.true_pose, w.estimated_pose
+    assert e[0] - t[0] == pytest.approx(120.0, abs=1e-6)
+    assert t[0] == pytest.approx(2.0 + 0.5 * 20.5, abs=0.2)
+    assert_scan_matches(w, columns=1024)  # the LIDAR still sees from the true pose
+
+
+def test_contacts_when_driving_into_the_cabinet():
+    w = World(preset="constricted_passage")
+    counts = [w.step(1.0, 0.2, 0.0)["contact_count"] for _ in range(400)]
+    assert counts[0] == 0 and max(counts) > 0
+    c = w.contacts
+    assert c.shape == (4,) and c[0] == c[1] + c[2]
+
+
+def test_errors_name_what_is_wrong(tmp_path):
+    with pytest.raises(ValueError, match="unknown preset `warehouse`"):
+        World(preset="warehouse")
+    with pytest.raises(ValueError, match="exactly one"):
+        World(preset="odometry_jump", procedural=3)
+    with pytest.raises(ValueError, match="columns"):
+        World(preset="odometry_jump", columns=1000)
+    with pytest.raises(ValueError, match="dropout"):
+        World(preset="odometry_jump", dropout=1.5)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("image: x.pgm\nresolution: fine\norigin: [0, 0, 0]\n")
+    with pytest.raises(ValueError, match=r"bad.yaml: line 2, field resolution"):
+        World(ros_map=str(bad))
+    scen = tmp_path / "s.json"
+    scen.write_text('{"walls": [], "start": {"x": 0, "y": 0}}')
+    with pytest.raises(ValueError, match=r"s.json: line 1"):
+        World(scenario=str(scen))
+    w = World(preset="odometry_jump")
+    with pytest.raises(ValueError, match="command"):
+        w.step(float("nan"), 0.0, 0.0)
+
+
+def test_scenario_file_round_trip(tmp_path):
+    scen = tmp_path / "corridor.json"
+    scen.write_text(
+        '{"name": "mine", "walls": [{"a": [0, -1], "b": [20, -1], "height": 2.0}, {"a": [0, 1], "b": [20, 1], "height": 2.0}],'
+        ' "start": {"x": 2, "y": 0, "yaw": 0}}'
+    )
+    w = World(scenario=str(scen), range_noise_std=0.0)
+    assert w.name == "mine"
+    assert w.ranges[0, 256] == pytest.approx(1.0, abs=1e-12)  # +y wall, 1 m away
