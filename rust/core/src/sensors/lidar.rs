@@ -238,8 +238,8 @@ impl Lidar {
         visible.clear();
         for slice in walls {
             for seg in slice.iter() {
-                if kch == 1 && zs > seg.height {
-                    continue; // the level ring passes over this wall
+                if (kch == 1 && zs > seg.height) || !seg.faces([sp.x, sp.y]) {
+                    continue; // the level ring passes over this wall, or sees only its back
                 }
                 let (dxa, dya) = (seg.a[0] - sp.x, seg.a[1] - sp.y);
                 let (dxb, dyb) = (seg.b[0] - sp.x, seg.b[1] - sp.y);

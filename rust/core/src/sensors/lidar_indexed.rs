@@ -48,7 +48,7 @@ impl Lidar {
         let zs = c.mount.z;
         let planar = kch == 1;
         let mut scratch = std::mem::take(&mut self.indexed);
-        for seg in extra {
+        for seg in extra.iter().filter(|s| s.faces([sp.x, sp.y])) {
             let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));
             let d = seg_origin_distance(a, b);
             if d <= c.max_range && !(planar && zs > seg.height) {
@@ -153,7 +153,7 @@ impl Lidar {
                 }
                 *st = scratch.epoch;
                 let seg = &segments[id as usize];
-                if planar && zs > seg.height {
+                if (planar && zs > seg.height) || !seg.faces([sp.x, sp.y]) {
                     continue;
                 }
                 let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));

@@ -103,6 +103,10 @@ pub fn wrap_angle(a: Real) -> Real {
 }
 
 /// A wall: the vertical rectangle over the segment `a → b`, from the floor to `height` (m).
+///
+/// A `one_sided` wall is the face of a solid lying on its left (seen from `a` toward `b`): a
+/// sensor in free space can only see it from the right, so the LIDAR skips it from the left
+/// (back-face culling). Walls traced from occupancy grids are one-sided; others are not.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Segment {
     /// First end point (m).
@@ -111,12 +115,27 @@ pub struct Segment {
     pub b: Point2,
     /// Top of the wall above the floor (m).
     pub height: Real,
+    /// Whether the wall bounds a solid on its left and is only seen from its right.
+    #[serde(default)]
+    pub one_sided: bool,
 }
 
 impl Segment {
-    /// A wall segment.
+    /// A wall seen from both sides.
     pub const fn new(a: Point2, b: Point2, height: Real) -> Self {
-        Self { a, b, height }
+        Self { a, b, height, one_sided: false }
+    }
+
+    /// The face of a solid lying to the left of `a → b`.
+    pub const fn one_sided(a: Point2, b: Point2, height: Real) -> Self {
+        Self { a, b, height, one_sided: true }
+    }
+
+    /// Whether a sensor at `p` can see this wall at all: always for two-sided walls, from the
+    /// right of `a → b` (strictly) for one-sided ones.
+    #[inline]
+    pub fn faces(&self, p: Point2) -> bool {
+        !self.one_sided || cross2(sub2(self.b, self.a), sub2(p, self.a)) < 0.0
     }
 
     /// Length (m).
