@@ -87,12 +87,12 @@ fn bench(c: &mut Criterion) {
             eprintln!("skipping {name}: {} not found", maps.join(yaml).display());
             continue;
         };
-        for max_range in [10.0, 20.0] {
+        for (max_range, cell) in [(10.0, 2.0), (20.0, 2.0), (10.0, 1.0), (10.0, 0.5)] {
             let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range, ..LidarConfig::default() }).unwrap();
-            let index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).unwrap();
+            let index = SegmentIndex::new(m.scenario.map.segments.clone(), cell).unwrap();
             let start = m.scenario.start;
             let mut k = 0;
-            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}", m.scenario.map.segments.len()), |b| {
+            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}_cell{cell}", m.scenario.map.segments.len()), |b| {
                 b.iter(|| {
                     k = (k + 1) % 16;
                     let p = Pose2::new(start.x + 0.05 * k as f64, start.y, 0.3 * k as f64);
