@@ -25,7 +25,7 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::noise::NormalPairs;
+use super::noise::standard_normal;
 use super::ray_segment::ray_segment_distance;
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -360,7 +360,6 @@ impl Lidar {
         let (ms, mc) = c.mount.yaw.sin_cos();
         out.points.clear();
         out.points.reserve(out.ranges.len());
-        let mut normal = NormalPairs::default();
         for k in 0..c.channels {
             for i in 0..n {
                 let r = &mut out.ranges[k * n + i];
@@ -368,7 +367,7 @@ impl Lidar {
                     *r = Real::INFINITY;
                 } else {
                     if c.range_noise_std > 0.0 {
-                        *r += c.range_noise_std * normal.next(rng);
+                        *r += c.range_noise_std * standard_normal(rng);
                         if *r < c.min_range || *r > c.max_range {
                             *r = Real::INFINITY;
                         }

@@ -191,10 +191,16 @@ impl Polygon {
         Self { vertices, height }
     }
 
-    /// The closed boundary as wall segments.
-    pub fn edges(&self) -> impl Iterator<Item = Segment> + '_ {
+    /// Signed area (m²): positive when the vertices run counter-clockwise.
+    pub fn signed_area(&self) -> Real {
         let n = self.vertices.len();
-        (0..n).map(move |i| Segment::new(self.vertices[i], self.vertices[(i + 1) % n], self.height))
+        0.5 * (0..n).map(|i| cross2(self.vertices[i], self.vertices[(i + 1) % n])).sum::<Real>()
+    }
+
+    /// The closed boundary as one-sided walls, the solid inside on each wall's left (the
+    /// polygon must be simple).
+    pub fn edges(&self) -> impl Iterator<Item = Segment> + '_ {
+        solid_edges(&self.vertices, self.height, self.signed_area() >= 0.0)
     }
 
     /// Whether `p` is strictly inside (even–odd rule).
@@ -226,6 +232,19 @@ impl Polygon {
     }
 }
 
+/// One-sided walls around the solid polygon `v` (counter-clockwise if `ccw`), solid on the left.
+pub(crate) fn solid_edges(v: &[Point2], height: Real, ccw: bool) -> impl Iterator<Item = Segment> + '_ {
+    let n = v.len();
+    (0..n).map(move |i| {
+        let (a, b) = (v[i], v[(i + 1) % n]);
+        if ccw {
+            Segment::one_sided(a, b, height)
+        } else {
+            Segment::one_sided(b, a, height)
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -253,6 +272,17 @@ mod tests {
         let s = Segment::new([0.0, 0.0], [2.0, 0.0], 1.0);
         assert!((s.distance_to_point([1.0, 0.5]) - 0.5).abs() < 1e-15);
         assert!((s.distance_to_point([3.0, 0.0]) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn polygon_edges_face_outward_whatever_the_vertex_order() {
+        for p in [Polygon::rect(0.0, 0.0, 1.0, 2.0, 1.0), Polygon { vertices: Polygon::rect(0.0, 0.0, 1.0, 2.0, 1.0).vertices.into_iter().rev().collect(), height: 1.0 }] {
+            for e in p.edges() {
+                let m = [0.5 * (e.a[0] + e.b[0]), 0.5 * (e.a[1] + e.b[1])];
+                let out = [m[0] + 0.01 * (m[0] - 0.5).signum() * ((m[0] - 0.5).abs() > 0.4) as i32 as Real, m[1] + 0.01 * (m[1] - 1.0).signum() * ((m[1] - 1.0).abs() > 0.9) as i32 as Real];
+                assert!(e.one_sided && e.faces(out) && !e.faces([0.5, 1.0]), "{e:?}");
+            }
+        }
     }
 
     #[test]
