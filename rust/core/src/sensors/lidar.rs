@@ -305,7 +305,7 @@ impl Lidar {
         let e = [b[0] - a[0], b[1] - a[1]];
         let ae = cross2(a, e);
         let planar = self.config.channels == 1;
-        let mut i = j0.rem_euclid(n as i64) as usize;
+        let mut i = (j0 & (n as i64 - 1)) as usize; // n is a power of two: Euclidean remainder
         for _ in 0..count {
             let col = i;
             i += 1;
