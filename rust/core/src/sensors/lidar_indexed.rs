@@ -119,7 +119,6 @@ impl Lidar {
         let ci = ((sp.x - origin[0]) / cell).floor() as i64;
         let cj = ((sp.y - origin[1]) / cell).floor() as i64;
         let inv_step = n as Real / std::f64::consts::TAU;
-        let segments = index.segments();
         let mut stats = IndexedScanStats::default();
         for &(di, dj) in &scratch.offsets {
             let (i, j) = (ci + di as i64, cj + dj as i64);
@@ -167,13 +166,12 @@ impl Lidar {
                 }
                 span = Some((k0, k1));
             }
-            for &id in ids {
+            for (&id, seg) in ids.iter().zip(index.bucket_walls(i as usize, j as usize)) {
                 let st = &mut scratch.seen[id as usize];
                 if *st == scratch.epoch {
                     continue;
                 }
                 *st = scratch.epoch;
-                let seg = &segments[id as usize];
                 if (planar && zs > seg.height) || !seg.faces([sp.x, sp.y]) {
                     continue;
                 }
