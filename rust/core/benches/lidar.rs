@@ -11,8 +11,9 @@ use shieldnav_core::sensors::{Lidar, LidarConfig, Scan};
 use shieldnav_core::world::{load_ros_map, preset, Pose2, RosMapOptions, Segment, SegmentIndex};
 
 /// 200 walls: a 20 × 20 m building outline cut into 2 m pieces (40 walls), 40 boxes
-/// (160 walls), seeded.
-fn world_200() -> Vec<Segment> {
+/// (160 walls), seeded. `solid_boxes`: box edges one-sided (as `StaticMap::add_polygon` stores
+/// furniture), else all walls two-sided.
+fn world_200(solid_boxes: bool) -> Vec<Segment> {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let mut w = Vec::new();
     for k in 0..10 {
@@ -30,14 +31,15 @@ fn world_200() -> Vec<Segment> {
         let (hx, hy) = (rng.random_range(0.1..0.6), rng.random_range(0.1..0.6));
         let v = [[cx - hx, cy - hy], [cx + hx, cy - hy], [cx + hx, cy + hy], [cx - hx, cy + hy]];
         for i in 0..4 {
-            w.push(Segment::new(v[i], v[(i + 1) % 4], 1.5));
+            w.push(if solid_boxes { Segment::one_sided(v[i], v[(i + 1) % 4], 1.5) } else { Segment::new(v[i], v[(i + 1) % 4], 1.5) });
         }
     }
     w
 }
 
 fn bench(c: &mut Criterion) {
-    let walls = world_200();
+    let walls = world_200(false);
+    let solid = world_200(true);
     assert_eq!(walls.len(), 200);
     let poses: Vec<Pose2> = (0..16).map(|k| Pose2::new(0.1 * k as f64 - 0.8, 0.05 * k as f64 - 0.4, 0.4 * k as f64)).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(0);
@@ -68,6 +70,16 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, ..LidarConfig::default() }).unwrap();
+    let mut k = 0;
+    g.throughput(Throughput::Elements(1024));
+    g.bench_function("planar_1024_world200_solid_boxes", |b| {
+        b.iter(|| {
+            k = (k + 1) % poses.len();
+            lidar.scan_into(&[black_box(&solid)], poses[k], 0.0, &mut rng, &mut scan).unwrap();
+            black_box(&scan.ranges);
+        })
+    });
     let s = preset("odometry_jump").unwrap();
     let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, ..LidarConfig::default() }).unwrap();
     g.throughput(Throughput::Elements(1024));
@@ -87,12 +99,12 @@ fn bench(c: &mut Criterion) {
             eprintln!("skipping {name}: {} not found", maps.join(yaml).display());
             continue;
         };
-        for max_range in [10.0, 20.0] {
+        for (max_range, cell) in [(10.0, 2.0), (20.0, 2.0), (10.0, 1.0), (10.0, 0.5)] {
             let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range, ..LidarConfig::default() }).unwrap();
-            let index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).unwrap();
+            let index = SegmentIndex::new(m.scenario.map.segments.clone(), cell).unwrap();
             let start = m.scenario.start;
             let mut k = 0;
-            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}", m.scenario.map.segments.len()), |b| {
+            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}_cell{cell}", m.scenario.map.segments.len()), |b| {
                 b.iter(|| {
                     k = (k + 1) % 16;
                     let p = Pose2::new(start.x + 0.05 * k as f64, start.y, 0.3 * k as f64);

@@ -28,6 +28,7 @@ fn bench(c: &mut Criterion) {
             black_box(scene.step(black_box([0.5, 0.0, 0.05]), 0.02, &obstacles, t).unwrap());
         })
     });
+    c.bench_function("physics_contacts_query_only", |b| b.iter(|| black_box(scene.contacts())));
 }
 
 criterion_group!(benches, bench);

@@ -179,3 +179,15 @@ fn indexed_scan_equals_the_full_scan_bit_for_bit() {
         }
     }
 }
+
+#[test]
+fn one_sided_grid_walls_give_the_two_sided_reference_ranges_in_free_space() {
+    use shieldnav_core::world::generate::{generate, GeneratorConfig, SiteKind};
+    for kind in [SiteKind::Office, SiteKind::Tunnel] {
+        let site = generate(3, &GeneratorConfig { kind, ..Default::default() }).unwrap();
+        assert!(site.scenario.map.segments.iter().any(|s| s.one_sided));
+        let poses: Vec<Pose2> = site.waypoints.iter().enumerate().map(|(k, p)| Pose2::new(p[0], p[1], 0.37 * k as f64)).collect();
+        let hits = compare(&site.scenario.map.segments, exact(1, 1024), &poses);
+        assert!(hits > 500 * poses.len());
+    }
+}

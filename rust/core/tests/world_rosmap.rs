@@ -195,6 +195,11 @@ fn indexed_scan_equals_the_full_scan_on_real_maps() {
             lidar.scan_into(&[walls], p, 0.0, &mut rng, &mut a).unwrap();
             lidar.scan_indexed_into(&index, &[], p, 0.0, &mut rng, &mut b).unwrap();
             assert!(a.ranges.iter().zip(&b.ranges).all(|(x, y)| x.to_bits() == y.to_bits()), "{name} pose {k}");
+            let st = lidar.last_indexed_stats();
+            assert!(st.buckets_occluded > 0 && st.walls_swept < walls.len() / 2, "{name}: {st:?}");
+            if k == 0 {
+                eprintln!("{name}: {} walls, {st:?}", walls.len());
+            }
         }
     }
 }

@@ -25,7 +25,7 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::noise::NormalPairs;
+use super::noise::standard_normal;
 use super::ray_segment::ray_segment_distance;
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -238,8 +238,8 @@ impl Lidar {
         visible.clear();
         for slice in walls {
             for seg in slice.iter() {
-                if kch == 1 && zs > seg.height {
-                    continue; // the level ring passes over this wall
+                if (kch == 1 && zs > seg.height) || !seg.faces([sp.x, sp.y]) {
+                    continue; // the level ring passes over this wall, or sees only its back
                 }
                 let (dxa, dya) = (seg.a[0] - sp.x, seg.a[1] - sp.y);
                 let (dxb, dyb) = (seg.b[0] - sp.x, seg.b[1] - sp.y);
@@ -305,7 +305,7 @@ impl Lidar {
         let e = [b[0] - a[0], b[1] - a[1]];
         let ae = cross2(a, e);
         let planar = self.config.channels == 1;
-        let mut i = j0.rem_euclid(n as i64) as usize;
+        let mut i = (j0 & (n as i64 - 1)) as usize; // n is a power of two: Euclidean remainder
         for _ in 0..count {
             let col = i;
             i += 1;
@@ -360,7 +360,6 @@ impl Lidar {
         let (ms, mc) = c.mount.yaw.sin_cos();
         out.points.clear();
         out.points.reserve(out.ranges.len());
-        let mut normal = NormalPairs::default();
         for k in 0..c.channels {
             for i in 0..n {
                 let r = &mut out.ranges[k * n + i];
@@ -368,7 +367,7 @@ impl Lidar {
                     *r = Real::INFINITY;
                 } else {
                     if c.range_noise_std > 0.0 {
-                        *r += c.range_noise_std * normal.next(rng);
+                        *r += c.range_noise_std * standard_normal(rng);
                         if *r < c.min_range || *r > c.max_range {
                             *r = Real::INFINITY;
                         }

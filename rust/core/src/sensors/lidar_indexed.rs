@@ -24,9 +24,27 @@ pub(super) struct IndexedScratch {
     epoch: u32,
     /// Upper bound of the beam ranges in each sector.
     sector_max: Vec<Real>,
+    /// What the last scan did.
+    stats: IndexedScanStats,
+}
+
+/// Work done by the last [`Lidar::scan_indexed_into`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct IndexedScanStats {
+    /// Non-empty buckets within range.
+    pub buckets: usize,
+    /// Of those, skipped as occluded.
+    pub buckets_occluded: usize,
+    /// Walls swept (facing the sensor, in range).
+    pub walls_swept: usize,
 }
 
 impl Lidar {
+    /// What the last [`Lidar::scan_indexed_into`] did (buckets visited and culled, walls swept).
+    pub fn last_indexed_stats(&self) -> IndexedScanStats {
+        self.indexed.stats
+    }
+
     /// Scans the walls of `index` plus `extra` (moving obstacles, few) from a robot at `body`.
     /// Ranges are identical to [`Lidar::scan_into`] over the same walls.
     pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
@@ -48,7 +66,7 @@ impl Lidar {
         let zs = c.mount.z;
         let planar = kch == 1;
         let mut scratch = std::mem::take(&mut self.indexed);
-        for seg in extra {
+        for seg in extra.iter().filter(|s| s.faces([sp.x, sp.y])) {
             let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));
             let d = seg_origin_distance(a, b);
             if d <= c.max_range && !(planar && zs > seg.height) {
@@ -101,7 +119,7 @@ impl Lidar {
         let ci = ((sp.x - origin[0]) / cell).floor() as i64;
         let cj = ((sp.y - origin[1]) / cell).floor() as i64;
         let inv_step = n as Real / std::f64::consts::TAU;
-        let segments = index.segments();
+        let mut stats = IndexedScanStats::default();
         for &(di, dj) in &scratch.offsets {
             let (i, j) = (ci + di as i64, cj + dj as i64);
             if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
@@ -120,6 +138,7 @@ impl Lidar {
             if dmin_b > c.max_range {
                 continue;
             }
+            stats.buckets += 1;
             // angular interval of the bucket, as sector indices (only away from the sensor)
             let mut span: Option<(i64, i64)> = None;
             if planar && dmin_b > 0.5 * cell {
@@ -142,23 +161,24 @@ impl Lidar {
                 let (k0, k1) = (j0.div_euclid(SECTOR as i64), j1.div_euclid(SECTOR as i64));
                 let occluded = (k0..=k1).all(|k| scratch.sector_max[k.rem_euclid(sectors as i64) as usize] <= dmin_b);
                 if occluded {
+                    stats.buckets_occluded += 1;
                     continue;
                 }
                 span = Some((k0, k1));
             }
-            for &id in ids {
+            for (&id, seg) in ids.iter().zip(index.bucket_walls(i as usize, j as usize)) {
                 let st = &mut scratch.seen[id as usize];
                 if *st == scratch.epoch {
                     continue;
                 }
                 *st = scratch.epoch;
-                let seg = &segments[id as usize];
-                if planar && zs > seg.height {
+                if (planar && zs > seg.height) || !seg.faces([sp.x, sp.y]) {
                     continue;
                 }
                 let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));
                 let d = seg_origin_distance(a, b);
                 if d <= c.max_range {
+                    stats.walls_swept += 1;
                     self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
                 }
             }
@@ -169,6 +189,7 @@ impl Lidar {
                 }
             }
         }
+        scratch.stats = stats;
         self.indexed = scratch;
         self.finish(rng, out);
         Ok(())

@@ -10,5 +10,6 @@ pub mod odometry;
 mod ray_segment;
 
 pub use lidar::{Lidar, LidarConfig, LidarMount, Scan};
+pub use lidar_indexed::IndexedScanStats;
 pub use odometry::{Odometry, OdometryConfig, OdometryFault};
 pub use ray_segment::ray_segment_distance;

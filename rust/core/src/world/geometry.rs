@@ -103,6 +103,10 @@ pub fn wrap_angle(a: Real) -> Real {
 }
 
 /// A wall: the vertical rectangle over the segment `a → b`, from the floor to `height` (m).
+///
+/// A `one_sided` wall is the face of a solid lying on its left (seen from `a` toward `b`): a
+/// sensor in free space can only see it from the right, so the LIDAR skips it from the left
+/// (back-face culling). Walls traced from occupancy grids are one-sided; others are not.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Segment {
     /// First end point (m).
@@ -111,12 +115,27 @@ pub struct Segment {
     pub b: Point2,
     /// Top of the wall above the floor (m).
     pub height: Real,
+    /// Whether the wall bounds a solid on its left and is only seen from its right.
+    #[serde(default)]
+    pub one_sided: bool,
 }
 
 impl Segment {
-    /// A wall segment.
+    /// A wall seen from both sides.
     pub const fn new(a: Point2, b: Point2, height: Real) -> Self {
-        Self { a, b, height }
+        Self { a, b, height, one_sided: false }
+    }
+
+    /// The face of a solid lying to the left of `a → b`.
+    pub const fn one_sided(a: Point2, b: Point2, height: Real) -> Self {
+        Self { a, b, height, one_sided: true }
+    }
+
+    /// Whether a sensor at `p` can see this wall at all: always for two-sided walls, from the
+    /// right of `a → b` (strictly) for one-sided ones.
+    #[inline]
+    pub fn faces(&self, p: Point2) -> bool {
+        !self.one_sided || cross2(sub2(self.b, self.a), sub2(p, self.a)) < 0.0
     }
 
     /// Length (m).
@@ -172,10 +191,16 @@ impl Polygon {
         Self { vertices, height }
     }
 
-    /// The closed boundary as wall segments.
-    pub fn edges(&self) -> impl Iterator<Item = Segment> + '_ {
+    /// Signed area (m²): positive when the vertices run counter-clockwise.
+    pub fn signed_area(&self) -> Real {
         let n = self.vertices.len();
-        (0..n).map(move |i| Segment::new(self.vertices[i], self.vertices[(i + 1) % n], self.height))
+        0.5 * (0..n).map(|i| cross2(self.vertices[i], self.vertices[(i + 1) % n])).sum::<Real>()
+    }
+
+    /// The closed boundary as one-sided walls, the solid inside on each wall's left (the
+    /// polygon must be simple).
+    pub fn edges(&self) -> impl Iterator<Item = Segment> + '_ {
+        solid_edges(&self.vertices, self.height, self.signed_area() >= 0.0)
     }
 
     /// Whether `p` is strictly inside (even–odd rule).
@@ -207,6 +232,19 @@ impl Polygon {
     }
 }
 
+/// One-sided walls around the solid polygon `v` (counter-clockwise if `ccw`), solid on the left.
+pub(crate) fn solid_edges(v: &[Point2], height: Real, ccw: bool) -> impl Iterator<Item = Segment> + '_ {
+    let n = v.len();
+    (0..n).map(move |i| {
+        let (a, b) = (v[i], v[(i + 1) % n]);
+        if ccw {
+            Segment::one_sided(a, b, height)
+        } else {
+            Segment::one_sided(b, a, height)
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -234,6 +272,17 @@ mod tests {
         let s = Segment::new([0.0, 0.0], [2.0, 0.0], 1.0);
         assert!((s.distance_to_point([1.0, 0.5]) - 0.5).abs() < 1e-15);
         assert!((s.distance_to_point([3.0, 0.0]) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn polygon_edges_face_outward_whatever_the_vertex_order() {
+        for p in [Polygon::rect(0.0, 0.0, 1.0, 2.0, 1.0), Polygon { vertices: Polygon::rect(0.0, 0.0, 1.0, 2.0, 1.0).vertices.into_iter().rev().collect(), height: 1.0 }] {
+            for e in p.edges() {
+                let m = [0.5 * (e.a[0] + e.b[0]), 0.5 * (e.a[1] + e.b[1])];
+                let out = [m[0] + 0.01 * (m[0] - 0.5).signum() * ((m[0] - 0.5).abs() > 0.4) as i32 as Real, m[1] + 0.01 * (m[1] - 1.0).signum() * ((m[1] - 1.0).abs() > 0.9) as i32 as Real];
+                assert!(e.one_sided && e.faces(out) && !e.faces([0.5, 1.0]), "{e:?}");
+            }
+        }
     }
 
     #[test]

@@ -105,41 +105,50 @@ impl OccupancyGrid {
         (j0..=j1).all(|j| (i0..=i1).all(|i| self.get(i as usize, j as usize) == c))
     }
 
-    /// The boundary of the solid cells (those for which `solid` holds) as wall segments of
-    /// `height` (m): every cell edge with a solid cell on exactly one side (the grid's outside
-    /// is not solid), collinear neighbouring edges merged into one straight run.
+    /// The boundary of the solid cells (those for which `solid` holds) as one-sided wall
+    /// segments of `height` (m), the solid on each wall's left: every cell edge with a solid
+    /// cell on exactly one side (the grid's outside is not solid), collinear neighbouring edges
+    /// with the solid on the same side merged into one straight run.
     pub fn wall_segments(&self, height: Real, solid: impl Fn(Cell) -> bool) -> Vec<Segment> {
         let (w, h) = (self.width, self.height);
         let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h && solid(self.get(i as usize, j as usize));
         let r = self.resolution;
         let mut out = Vec::new();
-        // horizontal edges on grid line y = j, between rows j-1 and j
+        let mut emit = |p: Point2, q: Point2, solid_left_when_forward: bool| {
+            let (p, q) = (self.grid_to_world(p), self.grid_to_world(q));
+            out.push(if solid_left_when_forward { Segment::one_sided(p, q, height) } else { Segment::one_sided(q, p, height) });
+        };
+        // horizontal edges on grid line y = j, between rows j-1 and j; side: solid above?
         for j in 0..=h as i64 {
-            let mut run: Option<i64> = None;
+            let mut run: Option<(i64, bool)> = None;
             for i in 0..=w as i64 {
-                let edge = i < w as i64 && occ(i, j - 1) != occ(i, j);
-                match (edge, run) {
-                    (true, None) => run = Some(i),
-                    (false, Some(i0)) => {
-                        out.push(Segment::new(self.grid_to_world([i0 as Real * r, j as Real * r]), self.grid_to_world([i as Real * r, j as Real * r]), height));
+                let edge = (i < w as i64 && occ(i, j - 1) != occ(i, j)).then(|| occ(i, j));
+                if let Some((i0, above)) = run {
+                    if edge != Some(above) {
+                        // +x has +y on its left: forward when the solid is above
+                        emit([i0 as Real * r, j as Real * r], [i as Real * r, j as Real * r], above);
                         run = None;
                     }
-                    _ => {}
+                }
+                if run.is_none() {
+                    run = edge.map(|s| (i, s));
                 }
             }
         }
-        // vertical edges on grid line x = i, between columns i-1 and i
+        // vertical edges on grid line x = i, between columns i-1 and i; side: solid left (-x)?
         for i in 0..=w as i64 {
-            let mut run: Option<i64> = None;
+            let mut run: Option<(i64, bool)> = None;
             for j in 0..=h as i64 {
-                let edge = j < h as i64 && occ(i - 1, j) != occ(i, j);
-                match (edge, run) {
-                    (true, None) => run = Some(j),
-                    (false, Some(j0)) => {
-                        out.push(Segment::new(self.grid_to_world([i as Real * r, j0 as Real * r]), self.grid_to_world([i as Real * r, j as Real * r]), height));
+                let edge = (j < h as i64 && occ(i - 1, j) != occ(i, j)).then(|| occ(i - 1, j));
+                if let Some((j0, left)) = run {
+                    if edge != Some(left) {
+                        // +y has -x on its left: forward when the solid is at -x
+                        emit([i as Real * r, j0 as Real * r], [i as Real * r, j as Real * r], left);
                         run = None;
                     }
-                    _ => {}
+                }
+                if run.is_none() {
+                    run = edge.map(|s| (j, s));
                 }
             }
         }
@@ -234,7 +243,15 @@ mod tests {
         assert_eq!(segs.len(), 4, "{segs:?}");
         let total: Real = segs.iter().map(|s| s.length()).sum();
         assert!((total - 2.0 * (1.5 + 1.0)).abs() < 1e-12);
+        // the solid is above the bottom edge, so it runs +x; every wall faces out of the block
         assert!(segs.iter().any(|s| s.a == [2.0, 2.5] && s.b == [3.5, 2.5]));
+        let inside = |p: Point2| p[0] > 2.0 && p[0] < 3.5 && p[1] > 2.5 && p[1] < 3.5;
+        for s in &segs {
+            let (m, e) = ([0.5 * (s.a[0] + s.b[0]), 0.5 * (s.a[1] + s.b[1])], [s.b[0] - s.a[0], s.b[1] - s.a[1]]);
+            let right = [m[0] + 0.01 * e[1].signum(), m[1] - 0.01 * e[0].signum()];
+            let left = [m[0] - 0.01 * e[1].signum(), m[1] + 0.01 * e[0].signum()];
+            assert!(s.one_sided && s.faces(right) && !s.faces(left) && !inside(right) && inside(left), "{s:?}");
+        }
     }
 
     #[test]

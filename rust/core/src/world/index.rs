@@ -24,6 +24,8 @@ pub struct SegmentIndex {
     ny: usize,
     starts: Vec<u32>,
     ids: Vec<u32>,
+    /// The walls of `ids`, copied in bucket order so a bucket's walls are contiguous in memory.
+    walls: Vec<Segment>,
     stamp: Vec<u32>,
     epoch: u32,
 }
@@ -85,7 +87,8 @@ impl SegmentIndex {
             }
         }
         let n = segments.len();
-        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, stamp: vec![0; n], epoch: 0 })
+        let walls = ids.iter().map(|&id| segments[id as usize]).collect();
+        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, walls, stamp: vec![0; n], epoch: 0 })
     }
 
     /// All walls.
@@ -113,6 +116,13 @@ impl SegmentIndex {
     pub fn bucket(&self, i: usize, j: usize) -> &[u32] {
         let b = j * self.nx + i;
         &self.ids[self.starts[b] as usize..self.starts[b + 1] as usize]
+    }
+
+    /// The walls of bucket `(i, j)`, contiguous, in the order of [`SegmentIndex::bucket`].
+    #[inline]
+    pub fn bucket_walls(&self, i: usize, j: usize) -> &[Segment] {
+        let b = j * self.nx + i;
+        &self.walls[self.starts[b] as usize..self.starts[b + 1] as usize]
     }
 
     /// Replaces `out` with every wall in a bucket touched by the square around the disc of

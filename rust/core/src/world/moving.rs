@@ -112,8 +112,7 @@ impl MovingObstacle {
     pub fn segments_at(&self, t: Real, out: &mut Vec<Segment>) {
         let pose = self.trajectory.pose_at(t);
         let v: Vec<Point2> = self.shape.vertices.iter().map(|&p| pose.transform_point(p)).collect();
-        let n = v.len();
-        out.extend((0..n).map(|i| Segment::new(v[i], v[(i + 1) % n], self.shape.height)));
+        out.extend(super::geometry::solid_edges(&v, self.shape.height, self.shape.signed_area() >= 0.0));
     }
 }
 

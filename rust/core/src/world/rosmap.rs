@@ -379,9 +379,9 @@ mod tests {
 
     #[test]
     fn parses_the_map_server_fields() {
-        let m = yaml("image: a.pgm\nresolution: 0.05 # m\norigin: [-1.5, 2.0, 3.14]\nnegate: 1\noccupied_thresh: 0.7\nfree_thresh: 0.2\n").unwrap();
+        let m = yaml("image: a.pgm\nresolution: 0.05 # m\norigin: [-1.5, 2.0, 0.25]\nnegate: 1\noccupied_thresh: 0.7\nfree_thresh: 0.2\n").unwrap();
         assert_eq!(m.image, PathBuf::from("/maps/a.pgm"));
-        assert_eq!(m.origin, [-1.5, 2.0, 3.14]);
+        assert_eq!(m.origin, [-1.5, 2.0, 0.25]);
         assert!(m.negate);
         assert_eq!((m.occupied_thresh, m.free_thresh), (0.7, 0.2));
     }

@@ -18,7 +18,9 @@
 //! }
 //! ```
 //! Lengths in metres, angles in radians, times in seconds; `polygons`, `goal`, `obstacles` and
-//! `odometry` may be left out; unknown keys are errors.
+//! `odometry` may be left out; unknown keys are errors. Instead of `trajectory` an obstacle may
+//! `walk`: `{"waypoints": [[x, y], ...], "speed": 1.2, "start_time": 0.0}` (a pedestrian at
+//! 1–1.5 m/s, facing where it goes).
 
 use std::path::Path;
 
@@ -26,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::geometry::{Polygon, Pose2, Segment};
 use super::map::StaticMap;
-use super::moving::MovingObstacle;
+use super::moving::{MovingObstacle, Trajectory};
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::sensors::OdometryConfig;
@@ -61,9 +63,28 @@ struct ScenarioFile {
     start: Pose2,
     goal: Option<Pose2>,
     #[serde(default)]
-    obstacles: Vec<MovingObstacle>,
+    obstacles: Vec<ObstacleFile>,
     #[serde(default)]
     odometry: OdometryConfig,
+}
+
+/// An obstacle in the file: key poses, or a walk through waypoints at a speed.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObstacleFile {
+    name: String,
+    shape: Polygon,
+    trajectory: Option<Trajectory>,
+    walk: Option<WalkFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WalkFile {
+    waypoints: Vec<[Real; 2]>,
+    speed: Real,
+    #[serde(default)]
+    start_time: Real,
 }
 
 impl Scenario {
@@ -107,12 +128,22 @@ impl Scenario {
         for (i, p) in f.polygons.into_iter().enumerate() {
             map.add_polygon(p).map_err(|e| Error::map_file(path, format!("polygons[{i}]"), e.to_string()))?;
         }
+        let mut obstacles = Vec::with_capacity(f.obstacles.len());
+        for (i, o) in f.obstacles.into_iter().enumerate() {
+            let at = format!("obstacles[{i}]");
+            let trajectory = match (o.trajectory, o.walk) {
+                (Some(t), None) => t,
+                (None, Some(w)) => Trajectory::walk(&w.waypoints, w.speed, w.start_time).map_err(|e| Error::map_file(path, format!("{at}.walk"), e.to_string()))?,
+                _ => return Err(Error::map_file(path, at, "give exactly one of `trajectory` and `walk`")),
+            };
+            obstacles.push(MovingObstacle { name: o.name, shape: o.shape, trajectory });
+        }
         let sc = Scenario {
             name: f.name.unwrap_or_else(|| "scenario".into()),
             map,
             start: f.start,
             goal: f.goal,
-            obstacles: f.obstacles,
+            obstacles,
             odometry: f.odometry,
         };
         sc.start.validate("start").map_err(|e| Error::map_file(path, "start", e.to_string()))?;
@@ -168,6 +199,18 @@ mod tests {
                        "start": {"x": 0, "y": 0, "yaw": 0}}"#;
         let err = Scenario::from_json_str(text, "w.json").unwrap_err().to_string();
         assert!(err.contains("w.json: walls[1]"), "{err}");
+    }
+
+    #[test]
+    fn pedestrian_walks_at_its_speed() {
+        let text = r#"{"walls": [], "start": {"x": 0, "y": 0, "yaw": 0},
+            "obstacles": [{"name": "pedestrian", "shape": {"vertices": [[-0.2, -0.25], [0.2, -0.25], [0.2, 0.25], [-0.2, 0.25]], "height": 1.8},
+                           "walk": {"waypoints": [[10, 0.3], [2, 0.3]], "speed": 1.25, "start_time": 1.0}}]}"#;
+        let s = Scenario::from_json_str(text, "p.json").unwrap();
+        let p = s.obstacles[0].trajectory.pose_at(3.0);
+        assert!((p.x - (10.0 - 2.0 * 1.25)).abs() < 1e-12 && (p.yaw - std::f64::consts::PI).abs() < 1e-12);
+        let bad = text.replace("1.25", "-1");
+        assert!(Scenario::from_json_str(&bad, "p.json").unwrap_err().to_string().contains("obstacles[0].walk"));
     }
 
     #[test]
