@@ -193,7 +193,9 @@ impl<T: Lane, const L: usize> Acc<T, L> {
         if SUMS {
             let (th, s2) = tanh_sech2::<T, F>(h * k.inv_gamma);
             let arg = T::madd::<F>(-k.kappa, th, -shift);
-            let w = sel(m, T::exp_nonpos::<F>(sel(arg < T::ZERO, arg, T::ZERO)), T::ZERO);
+            // `arg ≤ 0` for every kept point (up to rounding, which `exp` tolerates); points
+            // outside crop or band may exceed it and give garbage, dropped by the mask.
+            let w = sel(m, T::exp_nonpos::<F>(arg), T::ZERO);
             let c = w * s2;
             let (cx, cy) = (c * x, c * y);
             self.s[j] = self.s[j] + w;
