@@ -106,8 +106,11 @@ struct Coeffs<T> {
     crop2: T,
     z_lo: T,
     z_hi: T,
-    inv_gamma: T,
+    /// `2 log₂e / γ`: `exp(−2|h|/γ) = 2^(−|h| c2)`.
+    c2: T,
     kappa: T,
+    /// `κ log₂e`: the weights are computed as powers of two.
+    kappa2: T,
 }
 
 /// Raw sums of the second pass, reduced across lanes in `f64`.
@@ -141,13 +144,16 @@ fn mask_h<T: Lane, const S: usize, const D: usize>(x: T, y: T, z: T, k: &Coeffs<
     ((r2 <= k.crop2) & band, h)
 }
 
-/// `(tanh x, sech² x)` from one exponential.
+/// `(tanh(h/γ), sech²(h/γ))` from one exponential `e = exp(−2|h|/γ) = 2^(−|h| c2)` with
+/// `c2 = 2 log₂e / γ`: `tanh = sign(h)(1−e)/(1+e)`, `sech² = 4e/(1+e)²`; `e` is flushed to 0
+/// below the smallest normal power of two.
 #[inline(always)]
-fn tanh_sech2<T: Lane, const F: bool>(x: T) -> (T, T) {
-    let ax = x.abs();
-    let e = T::exp_nonpos::<F>(-(ax + ax));
+fn tanh_sech2<T: Lane, const F: bool>(h: T, c2: T) -> (T, T) {
+    let x = -(h.abs() * c2);
+    let under = x < T::EXP2_LOW;
+    let e = sel(under, T::ZERO, T::exp2_in_range::<F>(sel(under, T::EXP2_LOW, x)));
     let inv = T::ONE / (T::ONE + e);
-    let th = ((T::ONE - e) * inv).copysign(x);
+    let th = ((T::ONE - e) * inv).copysign(h);
     let four_e = (e + e) + (e + e);
     (th, four_e * inv * inv)
 }
@@ -180,7 +186,7 @@ impl<T: Lane, const L: usize> Acc<T, L> {
     /// Folds one point into lane `j`. With `SUMS = false` only `min h`, the count and the
     /// finiteness check run (the first pass of the two-pass mode).
     #[inline(always)]
-    fn add<const S: usize, const D: usize, const F: bool, const SUMS: bool>(&mut self, j: usize, p: &[T], k: &Coeffs<T>, shift: T) {
+    fn add<const S: usize, const D: usize, const F: bool, const SUMS: bool, const FIXED: bool>(&mut self, j: usize, p: &[T], k: &Coeffs<T>, shift: T) {
         let (x, y, z) = coords::<T, S>(p);
         let (m, h) = mask_h::<T, S, D>(x, y, z, k);
         // `h` is NaN or inf whenever a coordinate it uses is (or is too large to square);
@@ -191,11 +197,14 @@ impl<T: Lane, const L: usize> Acc<T, L> {
         self.hmin[j] = sel(hm < self.hmin[j], hm, self.hmin[j]);
         self.cnt[j] += m as u32;
         if SUMS {
-            let (th, s2) = tanh_sech2::<T, F>(h * k.inv_gamma);
-            let arg = T::madd::<F>(-k.kappa, th, -shift);
-            // `arg ≤ 0` for every kept point (up to rounding, which `exp` tolerates); points
-            // outside crop or band may exceed it and give garbage, dropped by the mask.
-            let w = sel(m, T::exp_nonpos::<F>(arg), T::ZERO);
+            let (th, s2) = tanh_sech2::<T, F>(h, k.c2);
+            // w = exp(−κ th − shift) = 2^(−κ log₂e th − shift log₂e), `shift` given in log₂
+            // units. For kept points the exponent is ≤ 0 (up to rounding) and, with the fixed
+            // shift, ≥ −2κ log₂e ≥ EXP2_LOW; points outside crop or band may fall outside that
+            // range and give garbage, dropped by the mask.
+            let arg = T::madd::<F>(-k.kappa2, th, -shift);
+            let w = T::exp2_in_range::<F>(if FIXED { arg } else { sel(arg < T::EXP2_LOW, T::EXP2_LOW, arg) });
+            let w = sel(m & (FIXED || arg >= T::EXP2_LOW), w, T::ZERO);
             let c = w * s2;
             let (cx, cy) = (c * x, c * y);
             self.s[j] = self.s[j] + w;
@@ -233,7 +242,7 @@ impl<T: Lane, const L: usize> Acc<T, L> {
 
 /// One pass over the scan in blocks of `L` points.
 #[inline(always)]
-fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const SUMS: bool>(
+fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const SUMS: bool, const FIXED: bool>(
     pts: &[T],
     k: &Coeffs<T>,
     shift: T,
@@ -243,11 +252,11 @@ fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, 
     let tail = blocks.remainder();
     for block in blocks {
         for j in 0..L {
-            acc.add::<S, D, F, SUMS>(j, &block[j * S..j * S + S], k, shift);
+            acc.add::<S, D, F, SUMS, FIXED>(j, &block[j * S..j * S + S], k, shift);
         }
     }
     for p in tail.chunks_exact(S) {
-        acc.add::<S, D, F, SUMS>(0, p, k, shift);
+        acc.add::<S, D, F, SUMS, FIXED>(0, p, k, shift);
     }
     acc.finish()
 }
@@ -261,17 +270,16 @@ fn both_passes<T: Lane, const S: usize, const D: usize, const L: usize, const F:
     k: &Coeffs<T>,
 ) -> (T, usize, bool, Sums, T) {
     if k.kappa.to_f64() <= T::MAX_FIXED_SHIFT {
-        let (hmin, n, finite, sums) = pass::<T, S, D, L, F, true>(pts, k, k.kappa);
+        let (hmin, n, finite, sums) = pass::<T, S, D, L, F, true, true>(pts, k, k.kappa2);
         return (hmin, n, finite, sums, k.kappa);
     }
-    let (hmin, n, finite, _) = pass::<T, S, D, L, F, false>(pts, k, T::ZERO);
+    let (hmin, n, finite, _) = pass::<T, S, D, L, F, false, false>(pts, k, T::ZERO);
     if !finite || n == 0 {
         return (hmin, n, finite, Sums::default(), T::ZERO);
     }
-    let (th_min, _) = tanh_sech2::<T, F>(hmin * k.inv_gamma);
-    let shift = -(k.kappa * th_min);
-    let (_, _, _, sums) = pass::<T, S, D, L, F, true>(pts, k, shift);
-    (hmin, n, finite, sums, shift)
+    let (th_min, _) = tanh_sech2::<T, F>(hmin, k.c2);
+    let (_, _, _, sums) = pass::<T, S, D, L, F, true, false>(pts, k, -(k.kappa2 * th_min));
+    (hmin, n, finite, sums, -(k.kappa * th_min))
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -340,8 +348,9 @@ pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams
         crop2: T::from_f64(crop * crop),
         z_lo: T::from_f64(z_lo),
         z_hi: T::from_f64(z_hi),
-        inv_gamma: T::from_f64(1.0 / p.gamma),
+        c2: T::from_f64(2.0 * std::f64::consts::LOG2_E / p.gamma),
         kappa: T::from_f64(p.kappa),
+        kappa2: T::from_f64(p.kappa * std::f64::consts::LOG2_E),
     };
     let (hmin, n, finite, sums, shift) = match (stride, dim) {
         (2, _) => dispatch::<T, 2, 2, 16>(pts, &k, level),

@@ -42,6 +42,11 @@ pub trait Lane:
     /// would be subnormal (x below about −87 for `f32`, −708 for `f64`). NaN is not handled:
     /// callers reject non-finite input first.
     fn exp_nonpos<const FMA: bool>(x: Self) -> Self;
+    /// Lowest argument [`Lane::exp2_in_range`] accepts (the smallest normal power of two).
+    const EXP2_LOW: Self;
+    /// `2^x` for `EXP2_LOW ≤ x ≤ 0` (Taylor series of `2^r`, `|r| ≤ 1/2`: about 1 ulp);
+    /// meaningless outside that range, so callers mask or clamp.
+    fn exp2_in_range<const FMA: bool>(x: Self) -> Self;
 }
 
 #[inline(always)]
@@ -82,6 +87,21 @@ impl Lane for f32 {
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         f32::copysign(self, sign)
+    }
+    const EXP2_LOW: Self = -126.0;
+    #[inline(always)]
+    fn exp2_in_range<const FMA: bool>(x: Self) -> Self {
+        const MAGIC: f32 = 12_582_912.0;
+        let t = x + MAGIC;
+        let r = x - (t - MAGIC);
+        let mut p: f32 = 0.000_154_035_3;
+        p = Self::madd::<FMA>(p, r, 0.001_333_355_8);
+        p = Self::madd::<FMA>(p, r, 0.009_618_129);
+        p = Self::madd::<FMA>(p, r, 0.055_504_11);
+        p = Self::madd::<FMA>(p, r, 0.240_226_5);
+        p = Self::madd::<FMA>(p, r, 0.693_147_2);
+        p = Self::madd::<FMA>(p, r, 1.0);
+        p * f32::from_bits(t.to_bits().wrapping_add(127) << 23)
     }
     #[inline(always)]
     fn exp_nonpos<const FMA: bool>(x: Self) -> Self {
@@ -137,6 +157,27 @@ impl Lane for f64 {
     fn copysign(self, sign: Self) -> Self {
         f64::copysign(self, sign)
     }
+    const EXP2_LOW: Self = -1022.0;
+    #[inline(always)]
+    fn exp2_in_range<const FMA: bool>(x: Self) -> Self {
+        const MAGIC: f64 = 6_755_399_441_055_744.0;
+        let t = x + MAGIC;
+        let r = x - (t - MAGIC);
+        let mut p: f64 = 2.567_843_599_348_819_6e-11;
+        p = Self::madd::<FMA>(p, r, 4.445_538_271_870_81e-10);
+        p = Self::madd::<FMA>(p, r, 7.054_911_620_801_121e-9);
+        p = Self::madd::<FMA>(p, r, 1.017_808_600_923_969_6e-7);
+        p = Self::madd::<FMA>(p, r, 1.321_548_679_014_430_5e-6);
+        p = Self::madd::<FMA>(p, r, 1.525_273_380_405_983_8e-5);
+        p = Self::madd::<FMA>(p, r, 0.000_154_035_303_933_816_06);
+        p = Self::madd::<FMA>(p, r, 0.001_333_355_814_642_844_1);
+        p = Self::madd::<FMA>(p, r, 0.009_618_129_107_628_477);
+        p = Self::madd::<FMA>(p, r, 0.055_504_108_664_821_576);
+        p = Self::madd::<FMA>(p, r, 0.240_226_506_959_100_7);
+        p = Self::madd::<FMA>(p, r, 0.693_147_180_559_945_3);
+        p = Self::madd::<FMA>(p, r, 1.0);
+        p * f64::from_bits(t.to_bits().wrapping_add(1023) << 52)
+    }
     #[inline(always)]
     fn exp_nonpos<const FMA: bool>(x: Self) -> Self {
         // x = n ln2 + r with the fdlibm split of ln2, exp(r) by its Taylor series to r^13
@@ -187,6 +228,19 @@ mod tests {
             let (got, want) = (f32::exp_nonpos::<false>(x) as f64, (x as f64).exp());
             assert!(((got - want) / want).abs() < 2.4e-7, "x={x} got={got} want={want}");
             x += 0.00731;
+        }
+    }
+
+    #[test]
+    fn exp2_in_range_matches_libm() {
+        let mut x = -125.9_f64;
+        while x <= 0.0 {
+            let want = x.exp2();
+            assert!(((f64::exp2_in_range::<false>(x) - want) / want).abs() < 4.5e-16, "f64 x={x}");
+            let got32 = f32::exp2_in_range::<false>(x as f32) as f64;
+            let want32 = (x as f32 as f64).exp2();
+            assert!(((got32 - want32) / want32).abs() < 2.4e-7, "f32 x={x}");
+            x += 0.0173;
         }
     }
 
