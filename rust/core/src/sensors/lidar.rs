@@ -218,20 +218,28 @@ impl Lidar {
         [self.el_cos[k] * self.az_cos[i], self.el_cos[k] * self.az_sin[i], self.el_sin[k]]
     }
 
+    /// Validates `body`, sizes `out` for one scan (every range `inf`) and stamps it; returns
+    /// the sensor's world pose. Shared by every scan entry point.
+    pub(crate) fn begin_scan(&self, body: Pose2, stamp: Real, out: &mut Scan) -> Result<Pose2> {
+        body.validate("pose")?;
+        let c = self.config;
+        out.channels = c.channels;
+        out.columns = c.columns;
+        out.stamp = stamp;
+        out.ranges.clear();
+        out.ranges.resize(c.columns * c.channels, Real::INFINITY);
+        let sp = self.sensor_pose(body);
+        out.sensor_pose = sp;
+        Ok(sp)
+    }
+
     /// Scans `walls` (each slice in the world frame) from a robot whose true pose is `body`,
     /// at time `stamp`; noise and dropout are drawn from `rng`. Writes into `out`, reusing its
     /// buffers.
     pub fn scan_into<R: Rng + ?Sized>(&mut self, walls: &[&[Segment]], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
-        body.validate("pose")?;
+        let sp = self.begin_scan(body, stamp, out)?;
         let c = self.config;
-        let (n, kch) = (c.columns, c.channels);
-        out.channels = kch;
-        out.columns = n;
-        out.stamp = stamp;
-        out.ranges.clear();
-        out.ranges.resize(n * kch, Real::INFINITY);
-        let sp = self.sensor_pose(body);
-        out.sensor_pose = sp;
+        let kch = c.channels;
         let (s, co) = sp.yaw.sin_cos();
         let zs = c.mount.z;
         let mut visible = std::mem::take(&mut self.visible);

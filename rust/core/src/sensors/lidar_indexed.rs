@@ -48,16 +48,9 @@ impl Lidar {
     /// Scans the walls of `index` plus `extra` (moving obstacles, few) from a robot at `body`.
     /// Ranges are identical to [`Lidar::scan_into`] over the same walls.
     pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
-        body.validate("pose")?;
+        let sp = self.begin_scan(body, stamp, out)?;
         let c = self.config;
         let (n, kch) = (c.columns, c.channels);
-        out.channels = kch;
-        out.columns = n;
-        out.stamp = stamp;
-        out.ranges.clear();
-        out.ranges.resize(n * kch, Real::INFINITY);
-        let sp = self.sensor_pose(body);
-        out.sensor_pose = sp;
         let (s, co) = sp.yaw.sin_cos();
         let to_sensor = |p: [Real; 2]| {
             let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
