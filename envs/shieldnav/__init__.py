@@ -9,12 +9,20 @@ The shield (paper Sec. III) filters a nominal velocity against a LIDAR scan::
 """
 
 from shieldnav import exceptions
-from shieldnav._core import NominalController, Shield, ShieldOutcome, ViewPlanner, World, __version__
+from shieldnav._core import Episode, NominalController, Shield, ShieldOutcome, ViewPlanner, World, __version__
 from shieldnav.config import SHIELD_DEFAULTS
+from shieldnav.env import ENV_DEFAULTS, CorridorInspectionEnv
 from shieldnav.exceptions import InvalidArgumentError, MapFileError, ShieldnavError, SolverError
+from shieldnav.registration import ENV_IDS, register_envs
+
+register_envs()
 
 
 __all__ = [
+    "ENV_DEFAULTS",
+    "ENV_IDS",
+    "CorridorInspectionEnv",
+    "Episode",
     "SHIELD_DEFAULTS",
     "InvalidArgumentError",
     "MapFileError",

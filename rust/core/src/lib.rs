@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod control;
+pub mod env;
 pub mod error;
 pub mod math;
 pub mod planner;

@@ -4,6 +4,8 @@
 
 use pyo3::prelude::*;
 
+mod config;
+mod episode;
 mod errors;
 mod planner;
 mod shield;
@@ -16,5 +18,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     shield::register(m)?;
     planner::register(m)?;
     world::register(m)?;
+    episode::register(m)?;
     Ok(())
 }

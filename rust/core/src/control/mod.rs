@@ -48,6 +48,11 @@ impl NominalController {
         Ok(Self { config })
     }
 
+    /// The configuration.
+    pub fn config(&self) -> &NominalControllerConfig {
+        &self.config
+    }
+
     /// The command toward `goal` (m) and `goal_yaw` (rad) from the estimated pose.
     pub fn command(&self, goal: &[f64; 2], goal_yaw: f64, position: &[f64; 2], yaw: f64) -> Result<NominalCommand> {
         if goal.iter().chain(position).chain([goal_yaw, yaw].iter()).any(|v| !v.is_finite()) {

@@ -95,6 +95,17 @@ impl Default for LidarConfig {
 }
 
 impl LidarConfig {
+    /// Elevation of each channel (rad), lowest first: `[0]` for a planar ring, else evenly
+    /// spread over `vertical_fov`.
+    pub fn elevations(&self) -> Vec<Real> {
+        if self.channels == 1 {
+            vec![0.0]
+        } else {
+            let (lo, hi) = self.vertical_fov;
+            (0..self.channels).map(|k| lo + k as Real * (hi - lo) / (self.channels - 1) as Real).collect()
+        }
+    }
+
     /// Checks every field; the error names it.
     pub fn validate(&self) -> Result<()> {
         if !(self.channels == 1 || (16..=128).contains(&self.channels)) {
@@ -178,12 +189,7 @@ impl Lidar {
         let n = config.columns;
         let step = std::f64::consts::TAU / n as Real;
         let (az_sin, az_cos) = (0..n).map(|i| (i as Real * step).sin_cos()).unzip();
-        let elev: Vec<Real> = if config.channels == 1 {
-            vec![0.0]
-        } else {
-            let (lo, hi) = config.vertical_fov;
-            (0..config.channels).map(|k| lo + k as Real * (hi - lo) / (config.channels - 1) as Real).collect()
-        };
+        let elev = config.elevations();
         Ok(Self {
             config,
             az_cos,

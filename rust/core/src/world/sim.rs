@@ -23,8 +23,12 @@ use super::rosmap::{load_ros_map, RosMapOptions};
 use super::scenario::Scenario;
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::robot::{ContactReport, PhysicsScene, RobotShape, Tracker, TrackerConfig};
+use crate::robot::{footprint_segment_distance, ContactReport, PhysicsScene, RobotShape, Tracker, TrackerConfig};
 use crate::sensors::{Lidar, LidarConfig, Odometry, Scan};
+
+/// Distance (m) within which [`World::clearance`] searches the wall index before it falls
+/// back to every wall.
+pub const CLEARANCE_SEARCH: Real = 2.0;
 
 /// Everything about a world that is not the scenario.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,7 +83,9 @@ pub struct World {
     time: Real,
     next_scan: Real,
     scan: Scan,
+    scan_body_pose: Pose2,
     index: SegmentIndex,
+    near: Vec<Segment>,
     moving: Vec<Segment>,
     contacts: ContactReport,
 }
@@ -107,7 +113,9 @@ impl World {
             time: 0.0,
             next_scan: 0.0,
             scan: Scan::default(),
+            scan_body_pose: Pose2::default(),
             index,
+            near: Vec::new(),
             moving: Vec::new(),
             contacts: ContactReport::default(),
         };
@@ -142,6 +150,7 @@ impl World {
             o.segments_at(self.time, &mut self.moving);
         }
         self.lidar.scan_indexed_into(&self.index, &self.moving, pose, self.time, &mut self.rng, &mut self.scan)?;
+        self.scan_body_pose = pose;
         self.next_scan += self.lidar.period();
         Ok(())
     }
@@ -166,6 +175,36 @@ impl World {
     /// The latest scan.
     pub fn scan(&self) -> &Scan {
         &self.scan
+    }
+
+    /// The robot's true pose when the latest scan was taken (the scan's points are in this
+    /// body frame).
+    pub fn scan_body_pose(&self) -> Pose2 {
+        self.scan_body_pose
+    }
+
+    /// The LIDAR.
+    pub fn lidar(&self) -> &Lidar {
+        &self.lidar
+    }
+
+    /// The true clearance (m): the distance from the robot's footprint to the nearest wall or
+    /// moving obstacle, 0 in contact. Exact: walls within [`CLEARANCE_SEARCH`] are measured from
+    /// the index; if none is that near, every wall is.
+    pub fn clearance(&mut self) -> Real {
+        let pose = self.physics.robot_pose();
+        let shape = self.config.robot;
+        let reach = 0.5 * shape.length.hypot(shape.width) + CLEARANCE_SEARCH;
+        self.index.query_into([pose.x, pose.y], reach, &mut self.near);
+        for o in &self.scenario.obstacles {
+            o.segments_at(self.time, &mut self.near);
+        }
+        let d = self.near.iter().map(|s| footprint_segment_distance(&shape, pose, s)).fold(Real::INFINITY, Real::min);
+        if d <= CLEARANCE_SEARCH {
+            d
+        } else {
+            self.index.segments().iter().map(|s| footprint_segment_distance(&shape, pose, s)).fold(d, Real::min)
+        }
     }
 
     /// World time (s).

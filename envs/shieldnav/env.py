@@ -1,0 +1,196 @@
+"""The corridor-inspection Gymnasium environment: an adapter over the Rust ``Episode``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from shieldnav._core import Episode, episode_defaults
+from shieldnav.exceptions import InvalidArgumentError
+
+#: Every configuration keyword of the environments with its default (the paper's values).
+ENV_DEFAULTS: dict[str, Any] = episode_defaults()
+
+_OBSERVATIONS = ("flat", "dict")
+
+
+class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
+    """Inspect the walls of a building with a legged robot whose commands pass a safety shield.
+
+    ## Description
+    A 1.1 × 0.5 m robot (Spot-like) carries a LIDAR and a camera. The mission is visual
+    inspection: every wall piece should pass through the camera's field of view (α = 69.4°
+    wide, within ``d_view`` + margin). Each step the agent's nominal velocity command goes
+    through the composite control-barrier-function shield of the paper (or a baseline), then
+    a low-level tracker and rapier physics. The LIDAR sees the true world; the odometry the
+    agent sees may drift and jump.
+
+    ## Action Space
+    ``Box(-1, 1, (3,), float32)``, read by ``action_mode``:
+
+    | mode | meaning |
+    |---|---|
+    | ``"body"`` (default) | ``(v_x, v_y, ω)`` over the robot's limits ``v_max = (1.6, 0.8)`` m/s, ``w_max = 1.5`` rad/s |
+    | ``"world"`` | ``(v_x, v_y)`` over ``controller_u_max`` in the odometry's world frame, ``ω`` as above |
+    | ``"waypoint"`` | reference offset ``a₀₁ · waypoint_reach`` (m, body frame) and yaw offset ``a₂ π``; the P controller ``K_p = 4`` makes ``u_nom`` |
+
+    Entries outside ``[-1, 1]`` (beyond 1e-6) or NaN raise ``InvalidArgumentError``.
+
+    ## Observation Space
+    ``observation="flat"`` (default): ``Box(float32, (lidar_bins + 9,))``, usable by SB3's
+    ``MlpPolicy``:
+
+    | index | observation |
+    |---|---|
+    | ``0 .. lidar_bins-1`` | nearest return per azimuth bin / ``lidar_max_range`` (bin 0 ahead, counter-clockwise; 1 = no return) |
+    | ``+0 .. +2`` | odometry estimate change over the last step (Δx, Δy m in the previous estimate's frame, Δψ rad) |
+    | ``+3 .. +5`` | body velocity over its limits |
+    | ``+6 .. +8`` | last command sent to the tracker, over the limits |
+
+    ``observation="dict"``: ``{"flat": the above, "points": (channels·columns, 3) float32
+    returns of the latest scan in the current body frame (0 where none), "valid": (channels·columns,)
+    int8 mask, "pose": (3,) float64 odometry estimate (x, y, ψ)}``: what the scripted agent reads.
+
+    ## Rewards
+    ``coverage_reward`` per metre of newly inspected wall, minus ``collision_penalty`` per step
+    in contact, minus ``intervention_penalty`` · ‖u* − u_nom‖.
+
+    ## Starting State
+    The scenario's start (presets, maps) or a new procedural site per reset, at rest.
+
+    ## Episode End
+    Terminated when ``coverage_goal`` of the inspectable wall length is inspected, or at the
+    first contact with ``terminate_on_contact=True``; truncated by the registered time limit,
+    or at a deadlock with ``truncate_on_deadlock=True``. Contacts do not end the episode by
+    default: ``info["cost"]`` counts them (safe-RL convention).
+
+    ``info`` on every step: ``cost``, ``collision``, ``contacts``, ``clearance``, ``H``,
+    ``h_min``, ``shield_active``, ``shield_feasible``, ``intervention``, ``u_nom``,
+    ``u_filtered`` (body frame, ``(v_x, v_y, ω)``), ``coverage``, ``new_coverage``,
+    ``deadlock``, ``odometry_error``, ``solve_time_ns``, ``num_points``, ``time``; on the last
+    step of an episode also ``episode`` (and ``shieldnav_episode``, the same dict, which SB3's
+    ``Monitor`` does not overwrite): collisions, contact time, deadlock, coverage, path
+    length, time, mean intervention, shield statistics.
+
+    ## Arguments
+    ``preset`` / ``procedural`` / ``map_path`` / ``scenario_path``: the site (exactly one).
+    ``observation``: ``"flat"`` or ``"dict"``. ``render_mode``: ``"rgb_array"`` or ``"human"``.
+    Every other keyword is a configuration key of ``ENV_DEFAULTS`` (shield, its parameters,
+    robot, tracker, LIDAR, rates, reward weights, coverage, deadlock), e.g.
+    ``gymnasium.make("shieldnav/ConstrictedPassage-v0", shield="distance", kappa=12)``.
+
+    ## Vectorized environment
+    See ``shieldnav.vector``.
+
+    ## Version History
+    * v0: initial release.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 25}
+
+    def __init__(
+        self,
+        *,
+        preset: str | None = None,
+        procedural: bool = False,
+        map_path: str | None = None,
+        scenario_path: str | None = None,
+        observation: str = "flat",
+        render_mode: str | None = None,
+        **config: Any,
+    ) -> None:
+        if observation not in _OBSERVATIONS:
+            raise InvalidArgumentError(f"invalid `observation`: expected one of {_OBSERVATIONS}, got {observation!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise InvalidArgumentError(
+                f"invalid `render_mode`: expected one of {self.metadata['render_modes']} or None, got {render_mode!r}"
+            )
+        self._site = dict(preset=preset, procedural=procedural, ros_map=map_path, scenario=scenario_path)
+        self._episode = Episode(**self._site, seed=0, **config)
+        self.config = {**ENV_DEFAULTS, **config}
+        self.observation_mode = observation
+        self.render_mode = render_mode
+        n = self._episode.observation_len
+        bins = n - 9
+        low = np.concatenate([np.zeros(bins), np.full(3, -np.inf), -np.ones(3), np.full(3, -np.inf)]).astype(np.float32)
+        high = np.concatenate([np.ones(bins), np.full(3, np.inf), np.ones(3), np.full(3, np.inf)]).astype(np.float32)
+        flat = spaces.Box(low, high, dtype=np.float32)
+        if observation == "flat":
+            self.observation_space: spaces.Space[Any] = flat
+        else:
+            channels, columns, max_range = self._episode.lidar_shape
+            m = channels * columns
+            self.observation_space = spaces.Dict(
+                {
+                    "flat": flat,
+                    "points": spaces.Box(-max_range, max_range, (m, 3), dtype=np.float32),
+                    "valid": spaces.MultiBinary(m),
+                    "pose": spaces.Box(-np.inf, np.inf, (3,), dtype=np.float64),
+                }
+            )
+        self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
+        self._renderer: Any = None
+        self._window: Any = None
+        self._steps = 0
+
+    @property
+    def episode(self) -> Episode:
+        """The Rust episode (poses, points, summary, render data)."""
+        return self._episode
+
+    def _obs(self, flat: np.ndarray) -> Any:
+        if self.observation_mode == "flat":
+            return flat
+        points, valid = self._episode.scan_points()
+        return {"flat": flat, "points": points, "valid": valid, "pose": np.array(self._episode.estimated_pose)}
+
+    def _info(self) -> dict[str, Any]:
+        return {"coverage": 0.0, "time": 0.0, "seed": self._episode_seed, "site": self._episode.name}
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
+        super().reset(seed=seed)
+        if options:
+            raise InvalidArgumentError(f"invalid `options`: reset takes no options, got {sorted(options)}")
+        self._episode_seed = int(self.np_random.integers(0, 2**63))
+        self._episode.reset(self._episode_seed)
+        self._steps = 0
+        if self.render_mode == "human":
+            self.render()
+        return self._obs(self._episode.observe()), self._info()
+
+    def step(self, action: np.ndarray) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        flat, reward, terminated, truncated, info = self._episode.step(action)
+        self._steps += 1
+        limit = self.spec.max_episode_steps if self.spec is not None else None
+        if terminated or truncated or (limit is not None and self._steps >= limit):
+            summary = self._episode.summary()
+            info["episode"] = summary
+            info["shieldnav_episode"] = summary
+        if self.render_mode == "human":
+            self.render()
+        return self._obs(flat), reward, terminated, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' or 'human'")
+            return None
+        from shieldnav import rendering
+
+        if self._renderer is None:
+            self._renderer = rendering.TopDownRenderer()
+        frame = rendering.frame_from_episode(self._episode)
+        rgb = self._renderer.draw(frame)
+        if self.render_mode == "human":
+            if self._window is None:
+                self._window = rendering.HumanWindow(rgb.shape[1], rgb.shape[0], self.metadata["render_fps"])
+            self._window.show(rgb)
+            return None
+        return rgb
+
+    def close(self) -> None:
+        if self._window is not None:
+            self._window.close()
+            self._window = None

@@ -1,0 +1,587 @@
+//! One episode of corridor inspection: the step pipeline, reward, metrics.
+
+use super::action::{nominal_command, ActionMode};
+use super::coverage::{Coverage, CoverageConfig};
+use super::deadlock::{DeadlockConfig, DeadlockMonitor};
+use super::observation::{bin_ranges, ObservationConfig};
+use crate::control::{NominalController, NominalControllerConfig};
+use crate::error::{Error, Result};
+use crate::math::Real;
+use crate::planner::ViewPlannerConfig;
+use crate::shield::{BodyState, Scan as PointScan, Shield, ShieldConfig, ShieldOutcome};
+use crate::world::generate::{generate, GeneratorConfig};
+use crate::world::{preset, wrap_angle, Pose2, Scenario, World, WorldConfig};
+
+/// Reward weights: `r = coverage · (new inspected length, m) − collision · cost − intervention ·
+/// ‖u* − u_nom‖`. `Default`: 1, 1, 0.05.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RewardConfig {
+    /// Per metre of newly inspected wall.
+    pub coverage: Real,
+    /// Per step in contact.
+    pub collision: Real,
+    /// Per m/s of shield intervention per step.
+    pub intervention: Real,
+}
+
+impl Default for RewardConfig {
+    fn default() -> Self {
+        Self {
+            coverage: 1.0,
+            collision: 1.0,
+            intervention: 0.05,
+        }
+    }
+}
+
+/// Everything about an episode but its site. `Default` holds the paper's values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EpisodeConfig {
+    /// Robot, tracker, LIDAR, control period. Its `seed` is replaced at every reset.
+    pub world: WorldConfig,
+    /// The shield. Without `u_max` the box is the tracker's body-frame speed limits.
+    pub shield: ShieldConfig,
+    /// The camera model of the coverage test (`fov_h`, `d_view`), shared with the planner.
+    pub planner: ViewPlannerConfig,
+    /// The P controller of the `"waypoint"` action mode; its `u_max` scales `"world"` actions.
+    pub controller: NominalControllerConfig,
+    /// How actions are read.
+    pub action_mode: ActionMode,
+    /// Reference offset (m) of a full `"waypoint"` action.
+    pub waypoint_reach: Real,
+    /// Reward weights.
+    pub reward: RewardConfig,
+    /// Coverage pieces and goal.
+    pub coverage: CoverageConfig,
+    /// Deadlock thresholds.
+    pub deadlock: DeadlockConfig,
+    /// The flat observation.
+    pub observation: ObservationConfig,
+    /// End the episode (terminated) at the first contact. Off: the cost is counted, the
+    /// episode goes on.
+    pub terminate_on_contact: bool,
+    /// End the episode (truncated) when a deadlock is detected.
+    pub truncate_on_deadlock: bool,
+}
+
+impl Default for EpisodeConfig {
+    fn default() -> Self {
+        Self {
+            world: WorldConfig::default(),
+            shield: ShieldConfig::default(),
+            planner: ViewPlannerConfig::default(),
+            controller: NominalControllerConfig::default(),
+            action_mode: ActionMode::Body,
+            waypoint_reach: 2.0,
+            reward: RewardConfig::default(),
+            coverage: CoverageConfig::default(),
+            deadlock: DeadlockConfig::default(),
+            observation: ObservationConfig::default(),
+            terminate_on_contact: false,
+            truncate_on_deadlock: false,
+        }
+    }
+}
+
+/// Where an episode's world comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Site {
+    /// A paper preset by name, the same every reset.
+    Preset(String),
+    /// A new procedural site every reset, generated from the reset's seed.
+    Procedural(GeneratorConfig),
+    /// A fixed scenario (a loaded ROS map or scenario file).
+    Scenario(Box<Scenario>),
+}
+
+impl Site {
+    /// The scenario of an episode reset with `seed`.
+    pub fn scenario(&self, seed: u64) -> Result<Scenario> {
+        match self {
+            Site::Preset(name) => preset(name),
+            Site::Procedural(g) => Ok(generate(seed, g)?.scenario),
+            Site::Scenario(s) => Ok((**s).clone()),
+        }
+    }
+}
+
+/// What one step did, in the units of the `info` dict.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepReport {
+    /// Reward of the step.
+    pub reward: Real,
+    /// Coverage complete, or contact with `terminate_on_contact`.
+    pub terminated: bool,
+    /// A deadlock with `truncate_on_deadlock`.
+    pub truncated: bool,
+    /// 1 while the true footprint is in contact, else 0.
+    pub cost: Real,
+    /// Contact points of the true footprint.
+    pub contacts: usize,
+    /// True distance from the footprint to the nearest obstacle (m).
+    pub clearance: Real,
+    /// The shield's barrier value (composite `H` for composite and none).
+    pub h: Real,
+    /// `min_i h_i`.
+    pub h_min: Real,
+    /// The shield changed the command.
+    pub shield_active: bool,
+    /// The shield's constraints could be met.
+    pub shield_feasible: bool,
+    /// `‖u* − u_nom‖` (m/s).
+    pub intervention: Real,
+    /// Nominal body-frame command `(v_x, v_y, ω)`.
+    pub u_nom: [Real; 3],
+    /// Filtered body-frame command `(v_x, v_y, ω)` sent to the tracker.
+    pub u_filtered: [Real; 3],
+    /// Inspected fraction.
+    pub coverage: Real,
+    /// Newly inspected length this step (m).
+    pub new_coverage: Real,
+    /// Deadlocked now.
+    pub deadlock: bool,
+    /// Distance between the odometry estimate and the true position (m).
+    pub odometry_error: Real,
+    /// Shield wall time (ns).
+    pub solve_time_ns: u64,
+    /// Points the shield used.
+    pub num_points: usize,
+    /// A scan was taken this step.
+    pub scanned: bool,
+    /// Episode time (s).
+    pub time: Real,
+}
+
+/// Totals of an episode so far.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EpisodeSummary {
+    /// Steps taken.
+    pub steps: u64,
+    /// Episode time (s).
+    pub time: Real,
+    /// Contact onsets (a contact after a contact-free step).
+    pub collisions: u64,
+    /// Steps in contact.
+    pub contact_steps: u64,
+    /// Time in contact (s).
+    pub contact_time: Real,
+    /// A deadlock was detected.
+    pub deadlock: bool,
+    /// Time of the first deadlock detection (s), NaN if none.
+    pub deadlock_time: Real,
+    /// Final coverage fraction.
+    pub coverage: Real,
+    /// True path length (m).
+    pub path_length: Real,
+    /// Mean `‖u* − u_nom‖` (m/s).
+    pub intervention_mean: Real,
+    /// Steps where the shield changed the command.
+    pub shield_active_steps: u64,
+    /// Steps where the shield was infeasible.
+    pub shield_infeasible_steps: u64,
+    /// Smallest true clearance (m).
+    pub min_clearance: Real,
+    /// Smallest `min_i h_i`.
+    pub min_h: Real,
+    /// Mean shield time (ns).
+    pub solve_time_mean_ns: Real,
+    /// Longest shield time (ns).
+    pub solve_time_max_ns: u64,
+    /// Sum of rewards.
+    pub total_reward: Real,
+}
+
+/// One running episode.
+#[derive(Debug)]
+pub struct Episode {
+    site: Site,
+    config: EpisodeConfig,
+    world: World,
+    shield: Shield,
+    controller: NominalController,
+    coverage: Coverage,
+    deadlock: DeadlockMonitor,
+    cos_el: Vec<Real>,
+    /// Valid returns of the latest scan in the current body frame, `[x, y, z]` rows.
+    points: Vec<Real>,
+    /// Index in the scan of each row of `points`.
+    point_ids: Vec<u32>,
+    last_estimate: Pose2,
+    estimate_change: Pose2,
+    velocity: [Real; 3],
+    last_command: [Real; 3],
+    last: StepReport,
+    last_shield: Option<ShieldOutcome>,
+    summary: EpisodeSummary,
+    intervention_sum: Real,
+    solve_time_sum: Real,
+    in_contact: bool,
+    seed: u64,
+}
+
+/// Mixes the reset seed into the world's RNG seed, distinct from the site generator's.
+fn world_seed(seed: u64) -> u64 {
+    let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+impl Episode {
+    /// Validates `config`, builds the site of `seed` and resets.
+    pub fn new(site: Site, mut config: EpisodeConfig, seed: u64) -> Result<Self> {
+        if config.shield.semi_axes.len() != 2 {
+            return Err(Error::invalid(
+                "semi_axes",
+                format!(
+                    "the robot is planar: give 2 semi-axes, got {}",
+                    config.shield.semi_axes.len()
+                ),
+            ));
+        }
+        config.world.tracker.validate()?;
+        if config.shield.u_max.is_none() {
+            config.shield.u_max = Some(config.world.tracker.v_max.to_vec());
+        }
+        if !(config.waypoint_reach.is_finite() && config.waypoint_reach > 0.0) {
+            return Err(Error::invalid(
+                "waypoint_reach",
+                format!("must be finite and > 0 m, got {}", config.waypoint_reach),
+            ));
+        }
+        for (name, v) in [
+            ("coverage_reward", config.reward.coverage),
+            ("collision_penalty", config.reward.collision),
+            ("intervention_penalty", config.reward.intervention),
+        ] {
+            if !v.is_finite() {
+                return Err(Error::invalid(name, format!("must be finite, got {v}")));
+            }
+        }
+        config.observation.validate(config.world.lidar.columns)?;
+        let shield = Shield::new(config.shield.clone())?;
+        let controller = NominalController::new(config.controller)?;
+        crate::planner::ViewPlanner::new(config.planner)?;
+        let deadlock = DeadlockMonitor::new(config.deadlock)?;
+        let scenario = site.scenario(seed)?;
+        let mut wc = config.world;
+        wc.seed = world_seed(seed);
+        let world = World::new(scenario, wc)?;
+        let coverage = Coverage::new(
+            &world.scenario().map.segments,
+            [world.true_pose().x, world.true_pose().y],
+            &config.coverage,
+        )?;
+        let cos_el = config
+            .world
+            .lidar
+            .elevations()
+            .iter()
+            .map(|e| e.cos())
+            .collect();
+        let mut ep = Self {
+            site,
+            config,
+            world,
+            shield,
+            controller,
+            coverage,
+            deadlock,
+            cos_el,
+            points: Vec::new(),
+            point_ids: Vec::new(),
+            last_estimate: Pose2::default(),
+            estimate_change: Pose2::default(),
+            velocity: [0.0; 3],
+            last_command: [0.0; 3],
+            last: StepReport::default(),
+            last_shield: None,
+            summary: EpisodeSummary::default(),
+            intervention_sum: 0.0,
+            solve_time_sum: 0.0,
+            in_contact: false,
+            seed,
+        };
+        ep.start()?;
+        Ok(ep)
+    }
+
+    /// Starts a new episode from `seed`: a new site for procedural sources, a new world RNG.
+    pub fn reset(&mut self, seed: u64) -> Result<()> {
+        let scenario = self.site.scenario(seed)?;
+        let mut wc = self.config.world;
+        wc.seed = world_seed(seed);
+        let same_site = !matches!(self.site, Site::Procedural(_));
+        let world = World::new(scenario, wc)?;
+        let start = world.true_pose();
+        self.coverage = if same_site {
+            let mut c = self.coverage.clone();
+            c.clear();
+            c
+        } else {
+            Coverage::new(
+                &world.scenario().map.segments,
+                [start.x, start.y],
+                &self.config.coverage,
+            )?
+        };
+        self.world = world;
+        self.seed = seed;
+        self.start()
+    }
+
+    fn start(&mut self) -> Result<()> {
+        self.deadlock.reset();
+        self.last_estimate = self.world.estimated_pose();
+        self.estimate_change = Pose2::default();
+        self.velocity = [0.0; 3];
+        self.last_command = [0.0; 3];
+        self.summary = EpisodeSummary {
+            min_clearance: Real::INFINITY,
+            min_h: Real::INFINITY,
+            deadlock_time: Real::NAN,
+            ..Default::default()
+        };
+        self.intervention_sum = 0.0;
+        self.solve_time_sum = 0.0;
+        self.in_contact = false;
+        self.last_shield = None;
+        self.compensate_points();
+        self.inspect();
+        let p = self.world.true_pose();
+        let complete = self.coverage.fraction() >= self.config.coverage.goal;
+        self.deadlock
+            .update(0.0, [p.x, p.y], self.coverage.inspected_count(), complete);
+        let clearance = self.world.clearance();
+        self.summary.coverage = self.coverage.fraction();
+        self.summary.min_clearance = clearance;
+        self.last = StepReport {
+            clearance,
+            coverage: self.coverage.fraction(),
+            h: Real::NAN,
+            h_min: Real::NAN,
+            shield_feasible: true,
+            scanned: true,
+            ..Default::default()
+        };
+        Ok(())
+    }
+
+    /// Inspects what the latest scan sees; returns the new length (m).
+    fn inspect(&mut self) -> Real {
+        let range = self.config.planner.d_view + self.config.coverage.margin;
+        let el = self.config.world.lidar.elevations();
+        self.coverage
+            .update(self.world.scan(), &el, self.config.planner.fov_h, range)
+    }
+
+    /// Moves the latest scan's valid returns into the current body frame (the robot's own
+    /// short-horizon motion since the scan, which the odometry faults do not touch).
+    fn compensate_points(&mut self) {
+        let scan = self.world.scan();
+        let rel = self.world.true_pose().between(&self.world.scan_body_pose());
+        let (s, c) = rel.yaw.sin_cos();
+        self.points.clear();
+        self.point_ids.clear();
+        for (k, p) in scan.points.iter().enumerate() {
+            if p[0].is_nan() {
+                continue;
+            }
+            self.points.extend_from_slice(&[
+                rel.x + c * p[0] - s * p[1],
+                rel.y + s * p[0] + c * p[1],
+                p[2],
+            ]);
+            self.point_ids.push(k as u32);
+        }
+    }
+
+    /// One control period: `action` (in `[-1, 1]³`, read by the action mode) → `u_nom` →
+    /// shield → tracker and physics → LIDAR (at its rate) → coverage, reward, metrics.
+    pub fn step(&mut self, action: [Real; 3]) -> Result<StepReport> {
+        let estimate = self.world.estimated_pose();
+        let u_nom = nominal_command(
+            self.config.action_mode,
+            &action,
+            estimate,
+            &self.config.world.tracker,
+            &self.controller,
+            self.config.waypoint_reach,
+        )?;
+        let w_max = self.config.world.tracker.w_max;
+        let omega = u_nom[2].clamp(-w_max, w_max);
+        let scan = PointScan::new_f64(&self.points, 3)?;
+        let out = self
+            .shield
+            .filter(&scan, &BodyState::planar(0.0, omega)?, &u_nom[..2])?;
+        let u = [out.u[0], out.u[1], omega];
+        let intervention = (u[0] - u_nom[0]).hypot(u[1] - u_nom[1]);
+        let before = self.world.true_pose();
+        let step = self.world.step(u)?;
+        self.compensate_points();
+        let new_coverage = if step.scanned { self.inspect() } else { 0.0 };
+        let clearance = self.world.clearance();
+        let coverage = self.coverage.fraction();
+        let complete = coverage >= self.config.coverage.goal;
+        let p = step.true_pose;
+        let deadlock = self.deadlock.update(
+            step.time,
+            [p.x, p.y],
+            self.coverage.inspected_count(),
+            complete,
+        );
+        let contact = step.contacts.any();
+        let cost = if contact { 1.0 } else { 0.0 };
+        let r = &self.config.reward;
+        let reward = r.coverage * new_coverage - r.collision * cost - r.intervention * intervention;
+        self.estimate_change = self.last_estimate.between(&step.estimated_pose);
+        self.last_estimate = step.estimated_pose;
+        self.velocity = step.velocity;
+        self.last_command = u;
+        let odometry_error = (step.estimated_pose.x - p.x).hypot(step.estimated_pose.y - p.y);
+        let report = StepReport {
+            reward,
+            terminated: complete || (contact && self.config.terminate_on_contact),
+            truncated: deadlock && self.config.truncate_on_deadlock,
+            cost,
+            contacts: step.contacts.count,
+            clearance,
+            h: out.value,
+            h_min: out.h_min,
+            shield_active: out.active,
+            shield_feasible: out.feasible,
+            intervention,
+            u_nom: [u_nom[0], u_nom[1], omega],
+            u_filtered: u,
+            coverage,
+            new_coverage,
+            deadlock,
+            odometry_error,
+            solve_time_ns: out.solve_time_ns,
+            num_points: out.num_points,
+            scanned: step.scanned,
+            time: step.time,
+        };
+        let s = &mut self.summary;
+        s.steps += 1;
+        s.time = step.time;
+        s.collisions += (contact && !self.in_contact) as u64;
+        s.contact_steps += contact as u64;
+        s.contact_time += cost * self.config.world.dt;
+        if deadlock && !s.deadlock {
+            s.deadlock = true;
+            s.deadlock_time = step.time;
+        }
+        s.coverage = coverage;
+        s.path_length += (p.x - before.x).hypot(p.y - before.y);
+        self.intervention_sum += intervention;
+        s.intervention_mean = self.intervention_sum / s.steps as Real;
+        s.shield_active_steps += out.active as u64;
+        s.shield_infeasible_steps += !out.feasible as u64;
+        s.min_clearance = s.min_clearance.min(clearance);
+        s.min_h = s.min_h.min(out.h_min);
+        self.solve_time_sum += out.solve_time_ns as Real;
+        s.solve_time_mean_ns = self.solve_time_sum / s.steps as Real;
+        s.solve_time_max_ns = s.solve_time_max_ns.max(out.solve_time_ns);
+        s.total_reward += reward;
+        self.in_contact = contact;
+        self.last = report;
+        self.last_shield = Some(out);
+        Ok(report)
+    }
+
+    /// Writes the flat observation (see [`super::observation`]) into `out`.
+    pub fn observe(&self, out: &mut [f32]) -> Result<()> {
+        let bins = self.config.observation.bins;
+        if out.len() != self.config.observation.len() {
+            return Err(Error::DimensionMismatch {
+                name: "observation",
+                expected: self.config.observation.len(),
+                got: out.len(),
+            });
+        }
+        let lidar = self.config.world.lidar;
+        bin_ranges(
+            self.world.scan(),
+            &self.cos_el,
+            lidar.max_range,
+            &mut out[..bins],
+        );
+        let t = &self.config.world.tracker;
+        let scale = [t.v_max[0], t.v_max[1], t.w_max];
+        let d = self.estimate_change;
+        let rest = &mut out[bins..];
+        rest[0] = d.x as f32;
+        rest[1] = d.y as f32;
+        rest[2] = d.yaw as f32;
+        for k in 0..3 {
+            rest[3 + k] = (self.velocity[k] / scale[k]) as f32;
+            rest[6 + k] = (self.last_command[k] / scale[k]) as f32;
+        }
+        Ok(())
+    }
+
+    /// Length of the flat observation.
+    pub fn observation_len(&self) -> usize {
+        self.config.observation.len()
+    }
+
+    /// Valid returns of the latest scan in the current body frame, `[x, y, z]` rows (m).
+    pub fn points(&self) -> &[Real] {
+        &self.points
+    }
+
+    /// Scan index (`channel · columns + column`) of each row of [`Episode::points`].
+    pub fn point_ids(&self) -> &[u32] {
+        &self.point_ids
+    }
+
+    /// The world.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The coverage state.
+    pub fn coverage(&self) -> &Coverage {
+        &self.coverage
+    }
+
+    /// The configuration (with the shield's box filled in).
+    pub fn config(&self) -> &EpisodeConfig {
+        &self.config
+    }
+
+    /// The site source.
+    pub fn site(&self) -> &Site {
+        &self.site
+    }
+
+    /// The last step's report (after a reset: clearance and coverage only).
+    pub fn last_report(&self) -> &StepReport {
+        &self.last
+    }
+
+    /// The shield's outcome at the last step, `None` right after a reset.
+    pub fn last_shield(&self) -> Option<&ShieldOutcome> {
+        self.last_shield.as_ref()
+    }
+
+    /// Totals so far.
+    pub fn summary(&self) -> &EpisodeSummary {
+        &self.summary
+    }
+
+    /// The seed of the last reset.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The estimated pose change over the last step (previous estimate's body frame).
+    pub fn estimate_change(&self) -> Pose2 {
+        Pose2::new(
+            self.estimate_change.x,
+            self.estimate_change.y,
+            wrap_angle(self.estimate_change.yaw),
+        )
+    }
+}

@@ -1,0 +1,97 @@
+//! The flat observation vector an MLP policy reads.
+//!
+//! Layout (`f32`, length `bins + 9`):
+//!
+//! | slice | content | range |
+//! |---|---|---|
+//! | `[0, bins)` | nearest horizontal return per azimuth bin over `max_range`; bin `b` is centred on body bearing `b · 2π / bins` (0 = ahead, counter-clockwise); 1 without a return | `[0, 1]` |
+//! | `bins + 0..3` | odometry estimate change over the last step, in the previous estimate's body frame: `Δx, Δy` (m), `Δψ` (rad) | unbounded (an odometry jump shows here) |
+//! | `bins + 3..6` | body velocity `(v_x, v_y, ω)` over `(v_max,x, v_max,y, ω_max)` | `[-1, 1]` |
+//! | `bins + 6..9` | last command sent to the tracker (after the shield), same scaling | unbounded in principle (a shield box wider than the tracker's limits) |
+
+use crate::error::{Error, Result};
+use crate::math::Real;
+use crate::sensors::Scan;
+
+/// Observation parameters. `Default`: 64 bins.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObservationConfig {
+    /// Azimuth bins of the range summary, between 4 and the LIDAR's column count.
+    pub bins: usize,
+}
+
+impl Default for ObservationConfig {
+    fn default() -> Self {
+        Self { bins: 64 }
+    }
+}
+
+/// Entries after the range bins.
+pub const PROPRIO_LEN: usize = 9;
+
+impl ObservationConfig {
+    /// Checks `bins` against the LIDAR's `columns`.
+    pub fn validate(&self, columns: usize) -> Result<()> {
+        if !(4..=columns).contains(&self.bins) {
+            return Err(Error::invalid(
+                "lidar_bins",
+                format!(
+                    "must be in [4, {columns}] (the LIDAR's columns), got {}",
+                    self.bins
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Length of the flat observation.
+    pub fn len(&self) -> usize {
+        self.bins + PROPRIO_LEN
+    }
+
+    /// Never empty.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+}
+
+/// Writes the range bins of `scan` into `out` (length `bins`). `cos_el` holds the cosine of
+/// each channel's elevation.
+pub fn bin_ranges(scan: &Scan, cos_el: &[Real], max_range: Real, out: &mut [f32]) {
+    let bins = out.len();
+    out.iter_mut().for_each(|v| *v = 1.0);
+    let cols = scan.columns;
+    for (k, c) in cos_el.iter().enumerate() {
+        let row = &scan.ranges[k * cols..(k + 1) * cols];
+        for (i, &r) in row.iter().enumerate() {
+            let b = ((i * bins + cols / 2) / cols) % bins;
+            let v = (r * c / max_range) as f32;
+            if v < out[b] {
+                out[b] = v;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bins_take_the_nearest_return_and_centre_bin_zero_ahead() {
+        let cols = 16;
+        let mut ranges = vec![Real::INFINITY; cols];
+        ranges[0] = 4.0; // ahead
+        ranges[15] = 2.0; // just right of ahead: same bin as ahead with 4 bins
+        ranges[4] = 10.0; // left
+        let scan = Scan {
+            channels: 1,
+            columns: cols,
+            ranges,
+            ..Default::default()
+        };
+        let mut out = [0.0f32; 4];
+        bin_ranges(&scan, &[1.0], 20.0, &mut out);
+        assert_eq!(out, [0.1, 0.5, 1.0, 1.0]);
+    }
+}

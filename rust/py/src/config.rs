@@ -1,0 +1,197 @@
+//! Keyword arguments ↔ `EpisodeConfig`: one table of `key → field`, read in both directions,
+//! so the defaults Python shows are the core's `Default`s.
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use shieldnav_core::env::{ActionMode, EpisodeConfig};
+use shieldnav_core::shield::ShieldMethod;
+use shieldnav_core::world::generate::{GeneratorConfig, SiteKind};
+use shieldnav_core::world::RosMapOptions;
+
+use crate::errors::invalid;
+
+/// Every plain `key → field` of the episode configuration.
+macro_rules! each_field {
+    ($f:ident) => {
+        $f!("dt", world.dt);
+        $f!("robot_length", world.robot.length);
+        $f!("robot_width", world.robot.width);
+        $f!("corner_radius", world.robot.corner_radius);
+        $f!("tracker_tau", world.tracker.tau);
+        $f!("v_max", world.tracker.v_max);
+        $f!("w_max", world.tracker.w_max);
+        $f!("a_max", world.tracker.a_max);
+        $f!("yaw_accel_max", world.tracker.alpha_max);
+        $f!("lidar_channels", world.lidar.channels);
+        $f!("lidar_columns", world.lidar.columns);
+        $f!("lidar_vertical_fov", world.lidar.vertical_fov);
+        $f!("lidar_min_range", world.lidar.min_range);
+        $f!("lidar_max_range", world.lidar.max_range);
+        $f!("lidar_noise_std", world.lidar.range_noise_std);
+        $f!("lidar_dropout", world.lidar.dropout);
+        $f!("lidar_rate_hz", world.lidar.rate_hz);
+        $f!("semi_axes", shield.semi_axes);
+        $f!("gamma", shield.gamma);
+        $f!("kappa", shield.kappa);
+        $f!("alpha", shield.alpha);
+        $f!("u_max", shield.u_max);
+        $f!("safety_distance", shield.safety_distance);
+        $f!("crop_radius", shield.scan.crop_radius);
+        $f!("height_band", shield.scan.height_band);
+        $f!("voxel_size", shield.scan.voxel_size);
+        $f!("angular_bins", shield.scan.angular_bins);
+        $f!("grad_eps", shield.grad_eps);
+        $f!("d_view", planner.d_view);
+        $f!("gamma_h", planner.gamma_h);
+        $f!("gamma_v", planner.gamma_v);
+        $f!("fov_h", planner.fov_h);
+        $f!("fov_v", planner.fov_v);
+        $f!("horizon", planner.horizon);
+        $f!("reach_threshold", planner.reach_threshold);
+        $f!("kp", controller.kp);
+        $f!("k_yaw", controller.k_yaw);
+        $f!("controller_u_max", controller.u_max);
+        $f!("omega_max", controller.omega_max);
+        $f!("waypoint_reach", waypoint_reach);
+        $f!("coverage_reward", reward.coverage);
+        $f!("collision_penalty", reward.collision);
+        $f!("intervention_penalty", reward.intervention);
+        $f!("piece_length", coverage.piece_length);
+        $f!("coverage_margin", coverage.margin);
+        $f!("coverage_goal", coverage.goal);
+        $f!("deadlock_window", deadlock.window);
+        $f!("deadlock_displacement", deadlock.displacement);
+        $f!("lidar_bins", observation.bins);
+        $f!("terminate_on_contact", terminate_on_contact);
+        $f!("truncate_on_deadlock", truncate_on_deadlock);
+    };
+}
+
+/// Keys that are not plain fields.
+const SPECIAL: [&str; 5] = [
+    "shield",
+    "action_mode",
+    "lidar_mount",
+    "site_kind",
+    "unknown_is_wall",
+];
+
+/// Every key [`episode_config`] accepts.
+pub fn known_keys() -> Vec<&'static str> {
+    let mut keys = Vec::new();
+    macro_rules! key {
+        ($key:literal, $($path:ident).+) => {
+            keys.push($key);
+        };
+    }
+    each_field!(key);
+    keys.extend(SPECIAL);
+    keys
+}
+
+/// Site options that live outside `EpisodeConfig`.
+pub struct SiteOptions {
+    pub generator: GeneratorConfig,
+    pub ros_map: RosMapOptions,
+}
+
+/// Reads `kwargs` over the defaults; an unknown key or a value of the wrong type is an
+/// `InvalidArgumentError` naming the key.
+pub fn episode_config(
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<(EpisodeConfig, SiteOptions)> {
+    let mut c = EpisodeConfig::default();
+    let mut site = SiteOptions {
+        generator: GeneratorConfig::default(),
+        ros_map: RosMapOptions::default(),
+    };
+    let Some(kw) = kwargs else {
+        return Ok((c, site));
+    };
+    let known = known_keys();
+    for k in kw.keys() {
+        let k: String = k
+            .extract()
+            .map_err(|_| invalid("kwargs", "keyword names must be strings"))?;
+        if !known.contains(&k.as_str()) {
+            let mut sorted = known.clone();
+            sorted.sort();
+            return Err(invalid(
+                &k,
+                format!("unknown keyword argument; known: {}", sorted.join(", ")),
+            ));
+        }
+    }
+    macro_rules! read {
+        ($key:literal, $($path:ident).+) => {
+            if let Some(v) = kw.get_item($key)? {
+                c.$($path).+ = v.extract().map_err(|e| invalid($key, format!("wrong type: {e}")))?;
+            }
+        };
+    }
+    each_field!(read);
+    if let Some(v) = kw.get_item("shield")? {
+        let name: String = v
+            .extract()
+            .map_err(|_| invalid("shield", "expected a string"))?;
+        c.shield.method = ShieldMethod::parse(&name).map_err(|_| invalid("shield", format!("unknown shield {name:?}; expected \"composite\", \"distance\", \"hardmin\" or \"none\"")))?;
+    }
+    if let Some(v) = kw.get_item("action_mode")? {
+        let name: String = v
+            .extract()
+            .map_err(|_| invalid("action_mode", "expected a string"))?;
+        c.action_mode = ActionMode::parse(&name).map_err(crate::errors::to_py)?;
+    }
+    if let Some(v) = kw.get_item("lidar_mount")? {
+        let (x, y, z, yaw): (f64, f64, f64, f64) = v
+            .extract()
+            .map_err(|_| invalid("lidar_mount", "expected (x, y, z, yaw)"))?;
+        c.world.lidar.mount = shieldnav_core::sensors::LidarMount { x, y, z, yaw };
+    }
+    if let Some(v) = kw.get_item("site_kind")? {
+        let name: String = v
+            .extract()
+            .map_err(|_| invalid("site_kind", "expected a string"))?;
+        site.generator.kind = match name.as_str() {
+            "office" => SiteKind::Office,
+            "tunnel" => SiteKind::Tunnel,
+            other => {
+                return Err(invalid(
+                    "site_kind",
+                    format!("expected \"office\" or \"tunnel\", got {other:?}"),
+                ))
+            }
+        };
+    }
+    if let Some(v) = kw.get_item("unknown_is_wall")? {
+        site.ros_map.unknown_is_wall = v
+            .extract()
+            .map_err(|_| invalid("unknown_is_wall", "expected a bool"))?;
+    }
+    c.world.lidar.validate().map_err(crate::errors::to_py)?;
+    c.world.robot.validate().map_err(crate::errors::to_py)?;
+    site.generator.footprint = shieldnav_core::world::Footprint {
+        length: c.world.robot.length,
+        width: c.world.robot.width,
+    };
+    Ok((c, site))
+}
+
+/// The defaults as a dict of the keys [`episode_config`] reads.
+pub fn episode_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let c = EpisodeConfig::default();
+    let d = PyDict::new(py);
+    macro_rules! write {
+        ($key:literal, $($path:ident).+) => {
+            d.set_item($key, c.$($path).+.clone())?;
+        };
+    }
+    each_field!(write);
+    d.set_item("shield", c.shield.method.name())?;
+    d.set_item("action_mode", c.action_mode.name())?;
+    let m = c.world.lidar.mount;
+    d.set_item("lidar_mount", (m.x, m.y, m.z, m.yaw))?;
+    d.set_item("site_kind", "office")?;
+    d.set_item("unknown_is_wall", RosMapOptions::default().unknown_is_wall)?;
+    Ok(d)
+}
