@@ -1,5 +1,10 @@
+import os
 import sys
 from pathlib import Path
+
+# the human render mode opens a pygame window: headless under test
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 import numpy as np
 import pytest

@@ -1,10 +1,10 @@
-"""The `_core.pyi` stubs match the native module (mypy's stubtest)."""
+"""The `_core.pyi` stubs match the native module (mypy's stubtest): every class, function and
+signature, nothing missing."""
 
 import subprocess
 import sys
 
 
 def test_stubs_match_native_module():
-    r = subprocess.run([sys.executable, "-m", "mypy.stubtest", "shieldnav._core",
-                        "--ignore-missing-stub"], capture_output=True, text=True, timeout=300)
+    r = subprocess.run([sys.executable, "-m", "mypy.stubtest", "shieldnav._core"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stdout + r.stderr

@@ -6,6 +6,17 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+__all__ = [
+    "__version__",
+    "Shield",
+    "ShieldOutcome",
+    "shield_defaults",
+    "ViewPlanner",
+    "NominalController",
+    "World",
+    "Episode",
+    "episode_defaults",
+]
 
 _Vec = npt.ArrayLike
 _Points = npt.NDArray[np.float32] | npt.NDArray[np.float64]
@@ -117,3 +128,99 @@ class NominalController:
     def command(
         self, goal: tuple[float, float], goal_yaw: float, position: tuple[float, float], yaw: float
     ) -> tuple[npt.NDArray[np.float64], float]: ...
+
+@final
+class World:
+    """A simulated corridor world: walls, obstacles, the robot's body, LIDAR and odometry."""
+
+    def __new__(
+        cls,
+        *,
+        preset: str | None = None,
+        procedural: int | None = None,
+        kind: str = "office",
+        ros_map: str | None = None,
+        scenario: str | None = None,
+        seed: int = 0,
+        dt: float = 0.02,
+        channels: int = 1,
+        columns: int = 1024,
+        min_range: float = 0.1,
+        max_range: float = 20.0,
+        range_noise_std: float = 0.01,
+        dropout: float = 0.0,
+        rate_hz: float = 10.0,
+        vertical_fov: tuple[float, float] = ...,
+        mount: tuple[float, float, float, float] = ...,
+        robot_length: float = 1.1,
+        robot_width: float = 0.5,
+        corner_radius: float = 0.0,
+        unknown_is_wall: bool = True,
+    ) -> World: ...
+    def step(self, vx: float, vy: float, wz: float) -> dict[str, Any]: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def ranges(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def points(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def scan_time(self) -> float: ...
+    @property
+    def sensor_pose(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def true_pose(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def estimated_pose(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def contacts(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def walls(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def name(self) -> str: ...
+
+_Pose3 = tuple[float, float, float]
+
+@final
+class Episode:
+    """One corridor-inspection episode in Rust: world, shield, coverage, reward, metrics."""
+
+    def __new__(
+        cls,
+        *,
+        preset: str | None = None,
+        procedural: bool = False,
+        ros_map: str | None = None,
+        scenario: str | None = None,
+        seed: int = 0,
+        **kwargs: Any,
+    ) -> Episode: ...
+    def reset(self, seed: int) -> None: ...
+    def step(
+        self, action: npt.ArrayLike
+    ) -> tuple[npt.NDArray[np.float32], float, bool, bool, dict[str, Any]]: ...
+    def observe(self) -> npt.NDArray[np.float32]: ...
+    def scan_points(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.int8]]: ...
+    def valid_points(self) -> npt.NDArray[np.float64]: ...
+    def summary(self) -> dict[str, Any]: ...
+    def render_data(self) -> dict[str, Any]: ...
+    @property
+    def observation_len(self) -> int: ...
+    @property
+    def lidar_shape(self) -> tuple[int, int, float]: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def true_pose(self) -> _Pose3: ...
+    @property
+    def estimated_pose(self) -> _Pose3: ...
+    @property
+    def goal(self) -> _Pose3 | None: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def geometry(self) -> tuple[tuple[float, float], list[float], float | None]: ...
+    @property
+    def dt(self) -> float: ...
+
+def episode_defaults() -> dict[str, Any]: ...

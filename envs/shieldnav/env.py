@@ -15,6 +15,9 @@ from shieldnav.exceptions import InvalidArgumentError
 ENV_DEFAULTS: dict[str, Any] = episode_defaults()
 
 _OBSERVATIONS = ("flat", "dict")
+#: Bound (m) of odometry quantities in the observation spaces: far beyond any site (walls lie
+#: within 1e5 m of the origin), finite so that checkers accept the space.
+_POSE_BOUND = 1.0e9
 
 
 class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
@@ -78,6 +81,8 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
     ## Arguments
     ``preset`` / ``procedural`` / ``map_path`` / ``scenario_path``: the site (exactly one).
     ``observation``: ``"flat"`` or ``"dict"``. ``render_mode``: ``"rgb_array"`` or ``"human"``.
+    ``report_timing``: put the shield's wall time in ``info["solve_time_ns"]`` (the one
+    entry of ``info`` that differs between two runs with the same seed).
     Every other keyword is a configuration key of ``ENV_DEFAULTS`` (shield, its parameters,
     robot, tracker, LIDAR, rates, reward weights, coverage, deadlock), e.g.
     ``gymnasium.make("shieldnav/ConstrictedPassage-v0", shield="distance", kappa=12)``.
@@ -100,6 +105,7 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         scenario_path: str | None = None,
         observation: str = "flat",
         render_mode: str | None = None,
+        report_timing: bool = True,
         **config: Any,
     ) -> None:
         if observation not in _OBSERVATIONS:
@@ -112,11 +118,18 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         self._episode = Episode(**self._site, seed=0, **config)
         self.config = {**ENV_DEFAULTS, **config}
         self.observation_mode = observation
+        self._report_timing = bool(report_timing)
         self.render_mode = render_mode
         n = self._episode.observation_len
         bins = n - 9
-        low = np.concatenate([np.zeros(bins), np.full(3, -np.inf), -np.ones(3), np.full(3, -np.inf)]).astype(np.float32)
-        high = np.concatenate([np.ones(bins), np.full(3, np.inf), np.ones(3), np.full(3, np.inf)]).astype(np.float32)
+        # the odometry change is unbounded in principle (a jump); the command is within the
+        # shield's box, which may be wider than the tracker's limits
+        big = _POSE_BOUND
+        box = np.asarray(self.config["u_max"] if self.config["u_max"] is not None else self.config["v_max"], float)
+        ratio = max(1.0, float(np.max(box / np.asarray(self.config["v_max"], float))))
+        cmd = np.array([ratio, ratio, 1.0])
+        low = np.concatenate([np.zeros(bins), [-big, -big, -np.pi], -np.ones(3), -cmd]).astype(np.float32)
+        high = np.concatenate([np.ones(bins), [big, big, np.pi], np.ones(3), cmd]).astype(np.float32)
         flat = spaces.Box(low, high, dtype=np.float32)
         if observation == "flat":
             self.observation_space: spaces.Space[Any] = flat
@@ -128,13 +141,19 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
                     "flat": flat,
                     "points": spaces.Box(-max_range, max_range, (m, 3), dtype=np.float32),
                     "valid": spaces.MultiBinary(m),
-                    "pose": spaces.Box(-np.inf, np.inf, (3,), dtype=np.float64),
+                    "pose": spaces.Box(-_POSE_BOUND, _POSE_BOUND, (3,), dtype=np.float64),
                 }
             )
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
+        #: A reference pose ``(x, y, ψ)`` in the odometry frame to draw (agents may set it).
+        self.reference: Any = None
         self._renderer: Any = None
         self._window: Any = None
-        self._steps = 0
+
+    @property
+    def preset(self) -> str | None:
+        """The paper preset this env runs, if any."""
+        return self._site["preset"]
 
     @property
     def episode(self) -> Episode:
@@ -156,16 +175,15 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
             raise InvalidArgumentError(f"invalid `options`: reset takes no options, got {sorted(options)}")
         self._episode_seed = int(self.np_random.integers(0, 2**63))
         self._episode.reset(self._episode_seed)
-        self._steps = 0
         if self.render_mode == "human":
             self.render()
         return self._obs(self._episode.observe()), self._info()
 
     def step(self, action: np.ndarray) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         flat, reward, terminated, truncated, info = self._episode.step(action)
-        self._steps += 1
-        limit = self.spec.max_episode_steps if self.spec is not None else None
-        if terminated or truncated or (limit is not None and self._steps >= limit):
+        if not self._report_timing:
+            del info["solve_time_ns"]
+        if terminated or truncated:
             summary = self._episode.summary()
             info["episode"] = summary
             info["shieldnav_episode"] = summary
@@ -181,14 +199,40 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
 
         if self._renderer is None:
             self._renderer = rendering.TopDownRenderer()
-        frame = rendering.frame_from_episode(self._episode)
-        rgb = self._renderer.draw(frame)
+        rgb = self._renderer.draw(self.render_frame())
         if self.render_mode == "human":
             if self._window is None:
                 self._window = rendering.HumanWindow(rgb.shape[1], rgb.shape[0], self.metadata["render_fps"])
             self._window.show(rgb)
             return None
         return rgb
+
+    def render_frame(self) -> Any:
+        """The top-down picture's content now (a ``shieldnav.rendering.RenderFrame``)."""
+        from shieldnav.rendering import RenderFrame
+
+        d = self._episode.render_data()
+        pose, est = d["pose"], d["estimated_pose"]
+        reference = None
+        if self.reference is not None:
+            # from the odometry frame into the true one: where the robot is really sent
+            rx, ry, ryaw = (float(v) for v in self.reference)
+            c, s = np.cos(est[2]), np.sin(est[2])
+            bx, by = c * (rx - est[0]) + s * (ry - est[1]), -s * (rx - est[0]) + c * (ry - est[1])
+            c, s = np.cos(pose[2]), np.sin(pose[2])
+            reference = np.array([pose[0] + c * bx - s * by, pose[1] + s * bx + c * by, ryaw - est[2] + pose[2]])
+        (length, width), semi_axes, crop = self._episode.geometry
+        text = (
+            f"{self._episode.name}  t = {d['time']:.2f} s",
+            f"coverage {100 * d['coverage']:.1f} %   H = {d['H']:.3f}",
+            f"odometry error {np.hypot(est[0] - pose[0], est[1] - pose[1]):.2f} m",
+        )
+        return RenderFrame(
+            walls=d["walls"], pieces=d["pieces"], inspected=d["inspected"], obstacles=d["obstacles"],
+            pose=pose, footprint=(length, width), semi_axes=tuple(semi_axes), points=d["points"],
+            crop_radius=crop, u_nom=d["u_nom"], u_star=d["u_star"], reference=reference,
+            ghost_pose=est, text=text, contact=d["contact"],
+        )
 
     def close(self) -> None:
         if self._window is not None:

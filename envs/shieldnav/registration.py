@@ -1,6 +1,6 @@
 """The registered environment ids and their time limits."""
 
-from gymnasium.envs.registration import register, registry
+from gymnasium.envs.registration import WrapperSpec, register, registry
 
 from shieldnav.maps import DEFAULT_MAP
 
@@ -11,19 +11,29 @@ ENV_IDS: dict[str, tuple[dict[str, object], int]] = {
     # a new procedural office site every reset
     "shieldnav/CorridorInspection-v0": ({"procedural": True}, 3000),
     # the paper's Scenario 1: a doorway narrowed by a misplaced cabinet
-    "shieldnav/ConstrictedPassage-v0": ({"preset": "constricted_passage"}, 1500),
+    "shieldnav/ConstrictedPassage-v0": ({"preset": "constricted_passage", "terminate_at_goal": True}, 1500),
     # Scenario 2: a self-similar corridor, the odometry jumps 120 m at 20 s; the paper widens
     # the ellipse to a_y = 0.6 m there
-    "shieldnav/OdometryJump-v0": ({"preset": "odometry_jump", "semi_axes": [0.9, 0.6]}, 2500),
+    "shieldnav/OdometryJump-v0": ({"preset": "odometry_jump", "semi_axes": [0.9, 0.6], "terminate_at_goal": True}, 2500),
     # Scenario 3: a chair pushed toward the robot at 9 s, a door swinging open at 20 s
-    "shieldnav/DynamicObstacles-v0": ({"preset": "dynamic_obstacles"}, 2000),
+    "shieldnav/DynamicObstacles-v0": ({"preset": "dynamic_obstacles", "terminate_at_goal": True}, 2000),
     # any ROS map_server map (`map_path=...`); MIT Building 31 by default
     "shieldnav/MapInspection-v0": ({"map_path": str(DEFAULT_MAP)}, 6000),
 }
+
+
+# outside the TimeLimit, so that a time-limit truncation also carries the episode summary
+_SUMMARY = WrapperSpec("RecordEpisodeSummary", "shieldnav.wrappers:RecordEpisodeSummary", {})
 
 
 def register_envs() -> None:
     """Registers every id of `ENV_IDS` (once)."""
     for env_id, (kwargs, steps) in ENV_IDS.items():
         if env_id not in registry:
-            register(id=env_id, entry_point=_ENTRY, kwargs=dict(kwargs), max_episode_steps=steps)
+            register(
+                id=env_id,
+                entry_point=_ENTRY,
+                kwargs=dict(kwargs),
+                max_episode_steps=steps,
+                additional_wrappers=(_SUMMARY,),
+            )

@@ -55,7 +55,7 @@ fn odometry_jump_moves_the_estimate_not_the_lidar() {
     assert!((b.estimated_pose.x - b.true_pose.x).abs() < 1e-6);
     let t = w.true_pose();
     let e = w.estimated_pose();
-    assert!((e.x - t.x - 120.0).abs() < 1e-6, "true {t:?} est {e:?}");
+    assert!((e.x - t.x - 100.0).abs() < 1e-6 && (e.y - t.y + 1.5).abs() < 1e-6, "true {t:?} est {e:?}");
     // the LIDAR still sees the corridor walls 1.2 m to each side of the true pose
     let n = ranges_before.len();
     for r in [&ranges_before, &w.scan().ranges] {
@@ -68,20 +68,20 @@ fn odometry_jump_moves_the_estimate_not_the_lidar() {
 fn pushed_chair_and_opening_door_appear_in_the_scan() {
     let cfg = WorldConfig { lidar: LidarConfig { range_noise_std: 0.0, ..Default::default() }, ..Default::default() };
     let mut w = World::from_preset("dynamic_obstacles", cfg).unwrap();
-    // the robot waits at x = 1 facing +x; beam 0 looks down the corridor
+    // the robot waits at (1, 0) facing +x; beam 5 (1.76° left) looks down the corridor at the chair
     let mut ahead = Vec::new();
     for _ in 0..(24.0 / 0.02) as usize {
         let o = w.step([0.0, 0.0, 0.0]).unwrap();
         if o.scanned {
-            ahead.push((o.time, w.scan().ranges[0]));
+            ahead.push((o.time, w.scan().ranges[5]));
         }
     }
     let at = |t: f64| ahead.iter().find(|(s, _)| (*s - t).abs() < 0.051).unwrap().1;
-    // chair (0.5 m box) slides from x = 13 to 10.5 at y 0.5 -> 0.15 between 9 and 11 s:
-    // beam 0 (y = 0) hits it once it crosses y = 0.25
-    assert!(at(8.0) > 9.0, "{}", at(8.0));
-    assert!((at(12.0) - (10.5 - 0.25 * 2f64.sqrt() * (0.3f64 + std::f64::consts::FRAC_PI_4).cos() - 1.0 - 0.0)).abs() < 0.3, "{}", at(12.0));
-    assert!(at(12.0) < 9.6);
+    // the 0.5 m chair slides from x = 16.6 to 14.6 (y 0.6 -> 0.45) between 9 and 11 s: the beam
+    // meets its near face, 2 m closer afterwards
+    let az = 5.0 * std::f64::consts::TAU / 1024.0;
+    assert!((at(8.0) - (16.35 - 1.0) / az.cos()).abs() < 1e-6, "{}", at(8.0));
+    assert!((at(12.0) - (14.35 - 1.0) / az.cos()).abs() < 1e-6, "{}", at(12.0));
 }
 
 #[test]

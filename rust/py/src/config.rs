@@ -64,6 +64,9 @@ macro_rules! each_field {
         $f!("lidar_bins", observation.bins);
         $f!("terminate_on_contact", terminate_on_contact);
         $f!("truncate_on_deadlock", truncate_on_deadlock);
+        $f!("terminate_at_goal", terminate_at_goal);
+        $f!("goal_tolerance", goal_tolerance);
+        $f!("stop_when_infeasible", stop_when_infeasible);
     };
 }
 

@@ -78,6 +78,7 @@ pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<
     d.set_item("contact_time", s.contact_time)?;
     d.set_item("deadlock", s.deadlock)?;
     d.set_item("deadlock_time", s.deadlock_time)?;
+    d.set_item("success", s.success)?;
     d.set_item("coverage", s.coverage)?;
     d.set_item("path_length", s.path_length)?;
     d.set_item("intervention_mean", s.intervention_mean)?;

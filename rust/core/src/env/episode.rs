@@ -62,6 +62,15 @@ pub struct EpisodeConfig {
     pub terminate_on_contact: bool,
     /// End the episode (truncated) when a deadlock is detected.
     pub truncate_on_deadlock: bool,
+    /// End the episode (terminated) once the true position is within `goal_tolerance` of the
+    /// scenario's goal; the mission then counts as complete (no deadlock after it).
+    pub terminate_at_goal: bool,
+    /// Radius (m) of the goal region.
+    pub goal_tolerance: Real,
+    /// When the shield reports its constraint infeasible, stop (translation and rotation): the
+    /// safe command against static walls. Off: send the shield's documented least-violating
+    /// command.
+    pub stop_when_infeasible: bool,
 }
 
 impl Default for EpisodeConfig {
@@ -79,6 +88,9 @@ impl Default for EpisodeConfig {
             observation: ObservationConfig::default(),
             terminate_on_contact: false,
             truncate_on_deadlock: false,
+            terminate_at_goal: false,
+            goal_tolerance: 0.5,
+            stop_when_infeasible: true,
         }
     }
 }
@@ -110,7 +122,8 @@ impl Site {
 pub struct StepReport {
     /// Reward of the step.
     pub reward: Real,
-    /// Coverage complete, or contact with `terminate_on_contact`.
+    /// Coverage complete, the goal reached with `terminate_at_goal`, or contact with
+    /// `terminate_on_contact`.
     pub terminated: bool,
     /// A deadlock with `truncate_on_deadlock`.
     pub truncated: bool,
@@ -167,6 +180,9 @@ pub struct EpisodeSummary {
     pub contact_time: Real,
     /// A deadlock was detected.
     pub deadlock: bool,
+    /// The episode ended with its mission complete (coverage goal, or the goal reached with
+    /// `terminate_at_goal`).
+    pub success: bool,
     /// Time of the first deadlock detection (s), NaN if none.
     pub deadlock_time: Real,
     /// Final coverage fraction.
@@ -242,6 +258,9 @@ impl Episode {
         config.world.tracker.validate()?;
         if config.shield.u_max.is_none() {
             config.shield.u_max = Some(config.world.tracker.v_max.to_vec());
+        }
+        if !(config.goal_tolerance.is_finite() && config.goal_tolerance > 0.0) {
+            return Err(Error::invalid("goal_tolerance", format!("must be finite and > 0 m, got {}", config.goal_tolerance)));
         }
         if !(config.waypoint_reach.is_finite() && config.waypoint_reach > 0.0) {
             return Err(Error::invalid(
@@ -414,7 +433,7 @@ impl Episode {
         let out = self
             .shield
             .filter(&scan, &BodyState::planar(0.0, omega)?, &u_nom[..2])?;
-        let u = [out.u[0], out.u[1], omega];
+        let u = if out.feasible || !self.config.stop_when_infeasible { [out.u[0], out.u[1], omega] } else { [0.0; 3] };
         let intervention = (u[0] - u_nom[0]).hypot(u[1] - u_nom[1]);
         let before = self.world.true_pose();
         let step = self.world.step(u)?;
@@ -422,8 +441,9 @@ impl Episode {
         let new_coverage = if step.scanned { self.inspect() } else { 0.0 };
         let clearance = self.world.clearance();
         let coverage = self.coverage.fraction();
-        let complete = coverage >= self.config.coverage.goal;
         let p = step.true_pose;
+        let at_goal = self.config.terminate_at_goal && self.world.scenario().goal.is_some_and(|g| (g.x - p.x).hypot(g.y - p.y) <= self.config.goal_tolerance);
+        let complete = coverage >= self.config.coverage.goal || at_goal;
         let deadlock = self.deadlock.update(
             step.time,
             [p.x, p.y],
@@ -473,6 +493,7 @@ impl Episode {
             s.deadlock_time = step.time;
         }
         s.coverage = coverage;
+        s.success = complete;
         s.path_length += (p.x - before.x).hypot(p.y - before.y);
         self.intervention_sum += intervention;
         s.intervention_mean = self.intervention_sum / s.steps as Real;

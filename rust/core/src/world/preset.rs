@@ -4,10 +4,11 @@
 //!   misplaced in front of it leaves a 1.1 m gap. The 1.1 × 0.5 m robot passes lengthwise;
 //!   a 0.8 m-radius sphere (the distance baseline's safety distance) needs 1.6 m and does not.
 //! - `"odometry_jump"` (Scenario 2): a 150 m self-similar 2.4 m corridor with side doorways
-//!   (1.0 m) into identical rooms every 12 m; the odometry jumps by 120 m at t = 20 s.
+//!   (1.0 m) into identical rooms every 12 m; at t = 20 s the odometry jumps 100 m along the
+//!   corridor and 1.5 m across it.
 //! - `"dynamic_obstacles"` (Scenario 3): a 1.8 m corridor with clutter on both sides; a chair
-//!   is pushed toward the robot from t = 9 s to 11 s and a side door swings open into the
-//!   path from t = 20 s to 22 s, leaving 0.9 m.
+//!   is pushed 2 m toward the robot and into its lane from t = 9 s to 11 s, and a side door
+//!   swings open across the lane from t = 20 s to 22 s; they leave 1.1 m and 1.05 m.
 //!
 //! ```
 //! use shieldnav_core::world::preset;
@@ -89,45 +90,50 @@ fn odometry_jump() -> Result<Scenario> {
     }
     let mut s = Scenario::new("odometry_jump", m, Pose2::new(2.0, 0.0, 0.0));
     s.goal = Some(Pose2::new(140.0, 0.0, 0.0));
-    s.odometry = OdometryConfig { faults: vec![OdometryFault::Jump { time: 20.0, dx: 120.0, dy: 0.0 }], ..Default::default() };
+    // perceptual aliasing: the estimate leaps 100 m down the tunnel and 1.5 m sideways, so a
+    // robot tracking its mission line is sent into the wall
+    s.odometry = OdometryConfig { faults: vec![OdometryFault::Jump { time: 20.0, dx: 100.0, dy: -1.5 }], ..Default::default() };
     Ok(s)
 }
 
 fn dynamic_obstacles() -> Result<Scenario> {
     let (len, half_w) = (30.0, 0.9);
+    let (door_x, door_w) = (23.0, 0.8);
     let mut m = StaticMap::new();
     m.add_segment(super::Segment::new([0.0, -half_w], [0.0, half_w], WALL_HEIGHT))?;
     m.add_segment(super::Segment::new([len, -half_w], [len, half_w], WALL_HEIGHT))?;
     m.add_polyline(&[[0.0, half_w], [len, half_w]], WALL_HEIGHT)?;
-    // bottom wall with a 0.9 m doorway at x in [17, 17.9] into a 3 x 3 m room
-    m.add_polyline(&[[0.0, -half_w], [17.0, -half_w]], WALL_HEIGHT)?;
-    m.add_polyline(&[[17.0, -half_w], [16.0, -half_w], [16.0, -3.9], [19.0, -3.9], [19.0, -half_w], [17.9, -half_w]], WALL_HEIGHT)?;
-    m.add_polyline(&[[17.9, -half_w], [len, -half_w]], WALL_HEIGHT)?;
+    // bottom wall with a 0.8 m doorway at x in [23, 23.8] into a 3 x 3 m room
+    m.add_polyline(&[[0.0, -half_w], [door_x, -half_w]], WALL_HEIGHT)?;
+    m.add_polyline(&[[door_x, -half_w], [door_x - 1.0, -half_w], [door_x - 1.0, -3.9], [door_x + 2.0, -3.9], [door_x + 2.0, -half_w], [door_x + door_w, -half_w]], WALL_HEIGHT)?;
+    m.add_polyline(&[[door_x + door_w, -half_w], [len, -half_w]], WALL_HEIGHT)?;
     // static clutter on both sides (boxes, a cart, shelves)
     for (x0, y0, x1, y1, h) in [
         (3.0, -0.9, 3.8, -0.55, 0.8),
         (7.0, -0.9, 7.5, -0.6, 1.0),
         (11.5, -0.9, 12.3, -0.5, 0.9),
-        (22.0, -0.9, 22.6, -0.6, 1.2),
+        (19.5, -0.9, 20.1, -0.6, 1.2),
         (5.0, 0.55, 5.6, 0.9, 1.0),
         (9.5, 0.6, 10.3, 0.9, 1.5),
-        (14.0, 0.5, 14.5, 0.9, 0.7),
-        (24.0, 0.55, 25.0, 0.9, 1.1),
+        (17.5, 0.5, 18.0, 0.9, 0.7),
+        (26.0, 0.55, 27.0, 0.9, 1.1),
     ] {
         m.add_polygon(Polygon::rect(x0, y0, x1, y1, h))?;
     }
+    // pushed 2 m toward the robot and into its lane: 1.1 m are left below it
     let chair = MovingObstacle {
         name: "chair".into(),
         shape: Polygon::rect(-0.25, -0.25, 0.25, 0.25, 0.9),
-        trajectory: Trajectory::linear(Pose2::new(13.0, 0.5, 0.0), Pose2::new(10.5, 0.15, 0.3), 9.0, 11.0),
+        trajectory: Trajectory::linear(Pose2::new(16.6, 0.6, 0.0), Pose2::new(14.6, 0.45, 0.0), 9.0, 11.0),
     };
+    // a 0.75 m leaf swinging from the wall line to square across the lane: 1.05 m are left
     let door = MovingObstacle {
         name: "door".into(),
-        shape: Polygon::rect(0.0, -0.05, 0.9, 0.0, 2.0),
-        trajectory: Trajectory::linear(Pose2::new(17.0, -half_w, 0.0), Pose2::new(17.0, -half_w, FRAC_PI_2), 20.0, 22.0),
+        shape: Polygon::rect(0.0, -0.05, 0.75, 0.0, 2.0),
+        trajectory: Trajectory::linear(Pose2::new(door_x, -half_w, 0.0), Pose2::new(door_x, -half_w, FRAC_PI_2), 20.0, 22.0),
     };
     let mut s = Scenario::new("dynamic_obstacles", m, Pose2::new(1.0, 0.0, 0.0));
-    s.goal = Some(Pose2::new(28.0, 0.0, 0.0));
+    s.goal = Some(Pose2::new(28.5, 0.0, 0.0));
     s.obstacles = vec![chair, door];
     Ok(s)
 }

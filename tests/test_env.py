@@ -1,0 +1,231 @@
+"""The Gymnasium environments: API conformance, determinism, the step pipeline's equations,
+and the paper's three scenario outcomes with the scripted inspection agent."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import shieldnav
+from agents.scripted import InspectionAgent
+from shieldnav import ENV_IDS, InvalidArgumentError, Shield
+
+ALL_IDS = sorted(ENV_IDS)
+
+
+def rollout(env_id: str, seed: int, steps: int | None = None, policy: str = "agent", **kwargs):
+    """Runs one episode; returns (observations, rewards, infos, final info + "summary")."""
+    env = gym.make(env_id, **kwargs)
+    agent = InspectionAgent(env)
+    rng = np.random.default_rng(seed)
+    obs, info = env.reset(seed=seed)
+    agent.reset()
+    observations, rewards, infos = [obs], [], []
+    k = 0
+    while True:
+        if policy == "agent":
+            action = agent.act(obs, info)
+        else:
+            action = rng.uniform(-1, 1, 3).astype(np.float32)
+        obs, reward, terminated, truncated, info = env.step(action)
+        observations.append(obs)
+        rewards.append(reward)
+        infos.append(info)
+        k += 1
+        if terminated or truncated or (steps is not None and k >= steps):
+            break
+    summary = env.unwrapped.episode.summary()
+    env.close()
+    return observations, rewards, infos, dict(info, summary=summary)
+
+
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_gymnasium_env_checker_passes(env_id):
+    from gymnasium.utils.env_checker import check_env
+
+    # the shield's wall time is the one info entry that is not reproducible
+    env = gym.make(env_id, render_mode="rgb_array", report_timing=False)
+    check_env(env.unwrapped)
+
+
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_sb3_env_checker_passes(env_id):
+    from stable_baselines3.common.env_checker import check_env
+
+    check_env(gym.make(env_id).unwrapped, warn=True)
+
+
+def test_dict_observation_passes_the_gymnasium_checker():
+    # (SB3's checker rightly warns that an (N, 3) point cloud needs a custom feature extractor:
+    # the Dict observation is for scripted agents, the flat one for MlpPolicy)
+    from gymnasium.utils.env_checker import check_env
+
+    check_env(gym.make("shieldnav/ConstrictedPassage-v0", observation="dict", report_timing=False).unwrapped)
+
+
+@pytest.mark.parametrize("env_id", ["shieldnav/CorridorInspection-v0", "shieldnav/DynamicObstacles-v0"])
+def test_same_seed_same_rollout_bit_for_bit(env_id):
+    a = rollout(env_id, seed=3, steps=300, policy="random")
+    b = rollout(env_id, seed=3, steps=300, policy="random")
+    assert len(a[0]) == len(b[0])
+    for x, y in zip(a[0], b[0]):
+        assert x.tobytes() == y.tobytes()
+    assert a[1] == b[1]
+    for x, y in zip(a[2], b[2]):
+        assert x["clearance"] == y["clearance"] and x["H"] == y["H"]
+        assert x["u_filtered"].tobytes() == y["u_filtered"].tobytes()
+
+
+def test_another_seed_gives_another_site_and_noise():
+    env = gym.make("shieldnav/CorridorInspection-v0")
+    o1, _ = env.reset(seed=1)
+    name1 = env.unwrapped.episode.name
+    o2, _ = env.reset(seed=2)
+    assert env.unwrapped.episode.name != name1
+    assert o1.tobytes() != o2.tobytes()
+    # a preset keeps its site, but the LIDAR noise follows the seed
+    env = gym.make("shieldnav/ConstrictedPassage-v0")
+    o1, _ = env.reset(seed=1)
+    o2, _ = env.reset(seed=2)
+    o3, _ = env.reset(seed=1)
+    assert o1.tobytes() != o2.tobytes() and o1.tobytes() == o3.tobytes()
+
+
+def test_info_keys_and_cost_convention():
+    env = gym.make("shieldnav/DynamicObstacles-v0", shield="none")
+    env.reset(seed=0)
+    keys = {"cost", "collision", "clearance", "H", "h_min", "shield_active", "shield_feasible", "intervention",
+            "u_nom", "u_filtered", "coverage", "deadlock", "odometry_error", "solve_time_ns"}
+    saw_contact = False
+    for _ in range(700):
+        # drive straight at the clutter on the left
+        _, _, _, _, info = env.step(np.array([1.0, 1.0, 0.0], np.float32))
+        assert keys <= set(info)
+        assert info["cost"] == (1.0 if info["contacts"] > 0 else 0.0)
+        assert info["collision"] == (info["cost"] > 0)
+        if info["cost"]:
+            saw_contact = True
+            assert info["clearance"] < 1e-2
+        assert info["u_nom"].shape == (3,) and info["u_filtered"].shape == (3,)
+    assert saw_contact, "an unshielded robot driven into the wall touches it"
+
+
+def test_step_applies_the_shield_to_the_current_scan():
+    """The env's u* is exactly the standalone Shield's on the same body-frame points."""
+    env = gym.make("shieldnav/DynamicObstacles-v0")
+    env.reset(seed=0)
+    ep = env.unwrapped.episode
+    shield = Shield(u_max=list(env.unwrapped.config["v_max"]))
+    for k in range(400):
+        action = np.array([1.0, 0.6 * np.sin(0.05 * k), 0.3], np.float32)
+        points = ep.valid_points()
+        u_nom = np.array([1.6 * float(action[0]), 0.8 * float(action[1])])
+        expected = shield.filter(points, u_nom, yaw=0.0, omega=1.5 * float(action[2]))
+        _, _, _, _, info = env.step(action)
+        assert info["H"] == expected.H and info["h_min"] == expected.h_min
+        if expected.feasible:
+            np.testing.assert_array_equal(info["u_filtered"][:2], expected.u)
+        assert info["intervention"] == pytest.approx(np.hypot(*(info["u_filtered"][:2] - info["u_nom"][:2])))
+
+
+def test_bad_actions_and_arguments_raise_named_errors():
+    env = gym.make("shieldnav/ConstrictedPassage-v0")
+    env.reset(seed=0)
+    with pytest.raises(InvalidArgumentError, match="action"):
+        env.step(np.array([1.5, 0.0, 0.0], np.float32))
+    with pytest.raises(InvalidArgumentError, match="action"):
+        env.step(np.array([np.nan, 0.0, 0.0], np.float32))
+    with pytest.raises(InvalidArgumentError, match="action"):
+        env.step(np.zeros(4, np.float32))
+    with pytest.raises(InvalidArgumentError, match="kapa"):
+        gym.make("shieldnav/ConstrictedPassage-v0", kapa=3.0)
+    with pytest.raises(InvalidArgumentError, match="shield"):
+        gym.make("shieldnav/ConstrictedPassage-v0", shield="magic")
+    with pytest.raises(InvalidArgumentError, match="gamma"):
+        gym.make("shieldnav/ConstrictedPassage-v0", gamma=-1.0)
+    with pytest.raises(InvalidArgumentError, match="lidar_bins"):
+        gym.make("shieldnav/ConstrictedPassage-v0", lidar_bins=2)
+    with pytest.raises(shieldnav.MapFileError):
+        gym.make("shieldnav/MapInspection-v0", map_path="/nonexistent/map.yaml")
+
+
+def test_defaults_are_the_papers():
+    d = shieldnav.ENV_DEFAULTS
+    assert d["semi_axes"] == [0.9, 0.45] and d["gamma"] == 0.9 and d["kappa"] == 8.0 and d["alpha"] == 2.0
+    assert d["crop_radius"] == 3.5 and d["safety_distance"] == 0.8 and d["kp"] == 4.0
+    assert d["d_view"] == 1.5 and d["gamma_h"] == 0.5 and np.degrees(d["fov_h"]) == pytest.approx(69.4)
+    assert d["dt"] == 0.02 and d["lidar_rate_hz"] == 10.0 and d["lidar_columns"] == 1024
+    assert d["shield"] == "composite" and d["terminate_on_contact"] is False
+
+
+def test_observation_layout():
+    env = gym.make("shieldnav/ConstrictedPassage-v0", lidar_bins=32)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (41,) and obs.dtype == np.float32
+    # counter-clockwise from ahead: bin 8 looks left, 16 behind, 24 right, over the 20 m range;
+    # the robot starts at (1, 0) in a room spanning y in [-1.5, 1.5] with its back wall at x = 0
+    assert obs[8] == pytest.approx(1.5 / 20.0, abs=2e-3)
+    assert obs[16] == pytest.approx(1.0 / 20.0, abs=2e-3)
+    assert obs[24] == pytest.approx(1.5 / 20.0, abs=2e-3)
+    obs, *_ = env.step(np.array([1.0, 0.0, 0.0], np.float32))
+    assert obs[32 + 6] == pytest.approx(1.0)  # last command, normalised
+    assert 0.0 < obs[32 + 3] < 1.0  # the tracker's lag
+
+
+def test_coverage_grows_and_reward_counts_it():
+    _, rewards, infos, last = rollout("shieldnav/DynamicObstacles-v0", seed=0)
+    cov = [i["coverage"] for i in infos]
+    assert all(b >= a for a, b in zip(cov, cov[1:]))
+    assert cov[-1] > 0.3
+    new = sum(i["new_coverage"] for i in infos)
+    assert sum(rewards) == pytest.approx(new - 0.05 * sum(i["intervention"] for i in infos) - sum(i["cost"] for i in infos))
+
+
+def test_dict_observation_drives_the_agent_like_the_flat_one():
+    _, _, a, _ = rollout("shieldnav/ConstrictedPassage-v0", seed=0, steps=200, observation="dict")
+    _, _, b, _ = rollout("shieldnav/ConstrictedPassage-v0", seed=0, steps=200)
+    for x, y in zip(a, b):
+        np.testing.assert_allclose(x["u_nom"], y["u_nom"], atol=1e-5)
+
+
+# --- the paper's outcomes with the scripted agent -------------------------------------------
+
+
+def test_scenario1_distance_shield_deadlocks_before_the_gap_composite_passes():
+    *_, composite = rollout("shieldnav/ConstrictedPassage-v0", seed=0, shield="composite")
+    e = composite["episode"]
+    assert e["success"] and e["collisions"] == 0 and not e["deadlock"]
+    *_, distance = rollout("shieldnav/ConstrictedPassage-v0", seed=0, shield="distance", truncate_on_deadlock=True)
+    e = distance["episode"]
+    assert e["deadlock"] and not e["success"] and e["collisions"] == 0
+    # stuck with its centre before the gap (cabinet and doorway span x 4.2 - 5.1)
+    assert distance["time"] < 20.0
+
+
+def test_scenario2_odometry_jump_unshielded_hits_the_wall_shielded_goes_on():
+    _, _, infos, none = rollout("shieldnav/OdometryJump-v0", seed=0, shield="none")
+    first_contact = next(i["time"] for i in infos if i["cost"] > 0)
+    assert 20.0 <= first_contact < 23.0, "the jump at 20 s sends the unshielded robot into the wall"
+    _, _, infos, comp = rollout("shieldnav/OdometryJump-v0", seed=0, shield="composite")
+    assert comp["episode"]["collisions"] == 0
+    assert max(i["odometry_error"] for i in infos) > 100.0
+    after = [i for i in infos if i["time"] > 20.0]
+    assert after[-1]["time"] > 45.0 and comp["episode"]["path_length"] > 30.0
+
+
+def test_scenario3_moving_chair_and_door_composite_zero_contacts_none_collides():
+    _, _, infos, comp = rollout("shieldnav/DynamicObstacles-v0", seed=0, shield="composite")
+    e = comp["episode"]
+    assert e["collisions"] == 0 and e["success"], e
+    assert e["time"] > 22.0, "it met the door swinging open from 20 s to 22 s"
+    *_, none = rollout("shieldnav/DynamicObstacles-v0", seed=0, shield="none")
+    assert none["episode"]["collisions"] > 0
+
+
+@pytest.mark.expensive
+@pytest.mark.parametrize("policy", ["agent", "random"])
+def test_corridor_inspection_shielded_never_touches_a_wall(policy):
+    for seed in range(20):
+        *_, last = rollout("shieldnav/CorridorInspection-v0", seed=seed, policy=policy, steps=1000)
+        assert last["summary"]["contact_steps"] == 0, (seed, last["summary"])
