@@ -26,8 +26,7 @@ use crate::math::Real;
 use crate::robot::{footprint_segment_distance, ContactReport, PhysicsScene, RobotShape, Tracker, TrackerConfig};
 use crate::sensors::{Lidar, LidarConfig, Odometry, Scan};
 
-/// Distance (m) within which [`World::clearance`] searches the wall index before it falls
-/// back to every wall.
+/// Distance (m) within which [`World::clearance`] first searches the wall index.
 pub const CLEARANCE_SEARCH: Real = 2.0;
 
 /// Everything about a world that is not the scenario.
@@ -86,6 +85,7 @@ pub struct World {
     scan_body_pose: Pose2,
     index: SegmentIndex,
     near: Vec<Segment>,
+    moving_now: Vec<Segment>,
     moving: Vec<Segment>,
     contacts: ContactReport,
 }
@@ -116,6 +116,7 @@ impl World {
             scan_body_pose: Pose2::default(),
             index,
             near: Vec::new(),
+            moving_now: Vec::new(),
             moving: Vec::new(),
             contacts: ContactReport::default(),
         };
@@ -189,21 +190,34 @@ impl World {
     }
 
     /// The true clearance (m): the distance from the robot's footprint to the nearest wall or
-    /// moving obstacle, 0 in contact. Exact: walls within [`CLEARANCE_SEARCH`] are measured from
-    /// the index; if none is that near, every wall is.
+    /// moving obstacle, 0 in contact. Exact: the wall index is searched within
+    /// [`CLEARANCE_SEARCH`] of the footprint, then within twice that, and so on, until a wall
+    /// lies inside the searched radius (or every wall has been measured).
     pub fn clearance(&mut self) -> Real {
         let pose = self.physics.robot_pose();
         let shape = self.config.robot;
-        let reach = 0.5 * shape.length.hypot(shape.width) + CLEARANCE_SEARCH;
-        self.index.query_into([pose.x, pose.y], reach, &mut self.near);
-        for o in &self.scenario.obstacles {
-            o.segments_at(self.time, &mut self.near);
-        }
-        let d = self.near.iter().map(|s| footprint_segment_distance(&shape, pose, s)).fold(Real::INFINITY, Real::min);
-        if d <= CLEARANCE_SEARCH {
-            d
-        } else {
-            self.index.segments().iter().map(|s| footprint_segment_distance(&shape, pose, s)).fold(d, Real::min)
+        let half_diagonal = 0.5 * shape.length.hypot(shape.width);
+        let moving = {
+            self.moving_now.clear();
+            for o in &self.scenario.obstacles {
+                o.segments_at(self.time, &mut self.moving_now);
+            }
+            self.moving_now.iter().map(|s| footprint_segment_distance(&shape, pose, s)).fold(Real::INFINITY, Real::min)
+        };
+        let mut radius = CLEARANCE_SEARCH;
+        loop {
+            self.index.query_into([pose.x, pose.y], half_diagonal + radius, &mut self.near);
+            // the centre's distance less the half diagonal bounds the footprint's from below
+            let mut d = moving;
+            for s in &self.near {
+                if s.distance_to_point([pose.x, pose.y]) - half_diagonal < d {
+                    d = d.min(footprint_segment_distance(&shape, pose, s));
+                }
+            }
+            if d <= radius || self.near.len() == self.index.segments().len() {
+                return d;
+            }
+            radius *= 2.0;
         }
     }
 
