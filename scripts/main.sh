@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Installs what is needed and runs the main job: the shield benchmark (whole filter call from
-# Python, composite vs the distance baseline, planar and 3D), then the Rust latency table.
+# Installs what is needed and runs the main job: the benchmark of the scripted inspection stack
+# (the paper's planner and P controller) under every shield and without one, on the paper's
+# three scenarios, procedural sites and a real building map. Arguments go to the harness
+# (python -m agents.benchmark --help). Results land in results/benchmark/.
 set -euo pipefail
 source "$(dirname "$0")/env.sh" bench
-python benchmarks/bench_shield.py "$@"
-cargo bench --quiet -p shieldnav-core --bench shield_latency
+python -m agents.benchmark "$@"

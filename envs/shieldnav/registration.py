@@ -1,6 +1,6 @@
 """The registered environment ids and their time limits."""
 
-from gymnasium.envs.registration import WrapperSpec, register, registry
+from gymnasium.envs.registration import register, registry
 
 from shieldnav.maps import DEFAULT_MAP
 
@@ -22,18 +22,9 @@ ENV_IDS: dict[str, tuple[dict[str, object], int]] = {
 }
 
 
-# outside the TimeLimit, so that a time-limit truncation also carries the episode summary
-_SUMMARY = WrapperSpec("RecordEpisodeSummary", "shieldnav.wrappers:RecordEpisodeSummary", {})
-
-
 def register_envs() -> None:
     """Registers every id of `ENV_IDS` (once)."""
     for env_id, (kwargs, steps) in ENV_IDS.items():
         if env_id not in registry:
-            register(
-                id=env_id,
-                entry_point=_ENTRY,
-                kwargs=dict(kwargs),
-                max_episode_steps=steps,
-                additional_wrappers=(_SUMMARY,),
-            )
+            # the episode knows its time limit too, so that its last step carries the summary
+            register(id=env_id, entry_point=_ENTRY, kwargs={**kwargs, "time_limit": steps}, max_episode_steps=steps)

@@ -67,6 +67,7 @@ macro_rules! each_field {
         $f!("terminate_at_goal", terminate_at_goal);
         $f!("goal_tolerance", goal_tolerance);
         $f!("stop_when_infeasible", stop_when_infeasible);
+        $f!("time_limit", time_limit);
     };
 }
 

@@ -67,6 +67,8 @@ pub struct EpisodeConfig {
     pub terminate_at_goal: bool,
     /// Radius (m) of the goal region.
     pub goal_tolerance: Real,
+    /// Truncate the episode after this many steps (the registered time limit); `None`: never.
+    pub time_limit: Option<u64>,
     /// When the shield reports its constraint infeasible, stop (translation and rotation): the
     /// safe command against static walls. Off: send the shield's documented least-violating
     /// command.
@@ -91,6 +93,7 @@ impl Default for EpisodeConfig {
             terminate_at_goal: false,
             goal_tolerance: 0.5,
             stop_when_infeasible: true,
+            time_limit: None,
         }
     }
 }
@@ -125,7 +128,7 @@ pub struct StepReport {
     /// Coverage complete, the goal reached with `terminate_at_goal`, or contact with
     /// `terminate_on_contact`.
     pub terminated: bool,
-    /// A deadlock with `truncate_on_deadlock`.
+    /// A deadlock with `truncate_on_deadlock`, or the time limit.
     pub truncated: bool,
     /// 1 while the true footprint is in contact, else 0.
     pub cost: Real,
@@ -258,6 +261,9 @@ impl Episode {
         config.world.tracker.validate()?;
         if config.shield.u_max.is_none() {
             config.shield.u_max = Some(config.world.tracker.v_max.to_vec());
+        }
+        if config.time_limit == Some(0) {
+            return Err(Error::invalid("time_limit", "must be at least 1 step (or None)"));
         }
         if !(config.goal_tolerance.is_finite() && config.goal_tolerance > 0.0) {
             return Err(Error::invalid("goal_tolerance", format!("must be finite and > 0 m, got {}", config.goal_tolerance)));
@@ -459,10 +465,12 @@ impl Episode {
         self.velocity = step.velocity;
         self.last_command = u;
         let odometry_error = (step.estimated_pose.x - p.x).hypot(step.estimated_pose.y - p.y);
+        let terminated = complete || (contact && self.config.terminate_on_contact);
+        let out_of_time = self.config.time_limit.is_some_and(|n| self.summary.steps + 1 >= n);
         let report = StepReport {
             reward,
-            terminated: complete || (contact && self.config.terminate_on_contact),
-            truncated: deadlock && self.config.truncate_on_deadlock,
+            terminated,
+            truncated: !terminated && ((deadlock && self.config.truncate_on_deadlock) || out_of_time),
             cost,
             contacts: step.contacts.count,
             clearance,

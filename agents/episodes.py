@@ -1,0 +1,101 @@
+"""One benchmark episode as a self-contained task: build the env, run a policy, return the
+episode's metrics and (optionally) its time series and video frames.
+
+Tasks are plain dicts in and out, so that a process pool or Ray can run them; the same task
+gives the same metrics (everything but wall times) on any backend.
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from typing import Any, Callable
+
+import gymnasium as gym
+import numpy as np
+
+import shieldnav  # noqa: F401  (registers the ids)
+from shieldnav.exceptions import InvalidArgumentError
+
+Policy = Callable[[Any, dict[str, Any]], np.ndarray]
+
+
+def load_policy(spec: str, env: gym.Env[Any, Any]) -> tuple[Policy, Callable[[], None]]:
+    """``(act, reset)`` for a policy spec: ``"scripted"`` (the inspection agent), a saved SB3
+    model (``*.zip``, PPO or SAC), or ``"module:callable"`` where ``callable(env)`` returns
+    ``act(obs, info) -> action`` (and may have a ``reset()``)."""
+    if spec == "scripted":
+        from agents.scripted import InspectionAgent
+
+        agent = InspectionAgent(env)
+        return agent.act, agent.reset
+    if spec.endswith(".zip"):
+        from stable_baselines3 import PPO, SAC
+
+        errors = []
+        for algo in (PPO, SAC):
+            try:
+                model = algo.load(spec, device="cpu")
+                break
+            except Exception as err:  # noqa: BLE001 - report every loader's reason below
+                errors.append(f"{algo.__name__}: {err}")
+        else:
+            raise InvalidArgumentError(f"invalid `policy`: {spec} is not a PPO or SAC model ({'; '.join(errors)})")
+
+        def act(obs: Any, info: dict[str, Any]) -> np.ndarray:
+            return model.predict(obs, deterministic=True)[0]
+
+        return act, lambda: None
+    if ":" in spec:
+        module, name = spec.split(":", 1)
+        factory = getattr(importlib.import_module(module), name)
+        policy = factory(env)
+        return policy, getattr(policy, "reset", lambda: None)
+    raise InvalidArgumentError(f"invalid `policy`: expected 'scripted', a .zip SB3 model or 'module:callable', got {spec!r}")
+
+
+def run_episode(task: dict[str, Any]) -> dict[str, Any]:
+    """Runs ``task = {env_id, shield, seed, policy, kwargs, trace, video_every}``.
+
+    Returns the task, the episode summary, wall-clock figures, the shield's per-step times and
+    point counts, and with ``trace`` the time series (t, u_nom, u*, H, h_min) and with
+    ``video_every > 0`` every n-th rendered frame.
+    """
+    kwargs = dict(task.get("kwargs", {}))
+    video_every = int(task.get("video_every", 0))
+    env = gym.make(task["env_id"], shield=task["shield"], render_mode="rgb_array" if video_every else None, **kwargs)
+    act, reset = load_policy(task.get("policy", "scripted"), env)
+    obs, info = env.reset(seed=int(task["seed"]))
+    reset()
+    solve, points, frames = [], [], []
+    series: dict[str, list[Any]] = {k: [] for k in ("t", "u_nom", "u_star", "H", "h_min", "clearance")}
+    t0 = time.perf_counter()
+    steps = 0
+    while True:
+        obs, _, terminated, truncated, info = env.step(act(obs, info))
+        steps += 1
+        solve.append(info["solve_time_ns"])
+        points.append(info["num_points"])
+        if task.get("trace"):
+            series["t"].append(info["time"])
+            series["u_nom"].append(info["u_nom"][:2].tolist())
+            series["u_star"].append(info["u_filtered"][:2].tolist())
+            series["H"].append(info["H"])
+            series["h_min"].append(info["h_min"])
+            series["clearance"].append(info["clearance"])
+        if video_every and steps % video_every == 0:
+            frames.append(env.render())
+        if terminated or truncated:
+            break
+    wall = time.perf_counter() - t0
+    summary = env.unwrapped.episode.summary()  # type: ignore[attr-defined]
+    env.close()
+    return {
+        "task": {k: v for k, v in task.items() if k != "kwargs"} | {"kwargs": kwargs},
+        "summary": summary,
+        "steps_per_s": steps / wall,
+        "solve_time_ns": np.asarray(solve, dtype=np.int64),
+        "num_points": np.asarray(points, dtype=np.int32),
+        "series": series if task.get("trace") else None,
+        "frames": frames,
+    }
