@@ -16,6 +16,7 @@ __all__ = [
     "World",
     "Episode",
     "episode_defaults",
+    "Batch",
 ]
 
 _Vec = npt.ArrayLike
@@ -224,3 +225,37 @@ class Episode:
     def dt(self) -> float: ...
 
 def episode_defaults() -> dict[str, Any]: ...
+
+@final
+class Batch:
+    """N corridor-inspection episodes stepped together in Rust."""
+
+    def __new__(
+        cls,
+        num_envs: int,
+        seeds: npt.ArrayLike,
+        *,
+        preset: str | None = None,
+        procedural: bool = False,
+        ros_map: str | None = None,
+        scenario: str | None = None,
+        autoreset_mode: str = "next_step",
+        threads: int = 2,
+        **kwargs: Any,
+    ) -> Batch: ...
+    def reset(self, seeds: npt.ArrayLike) -> npt.NDArray[np.float32]: ...
+    def step(
+        self, actions: npt.ArrayLike, next_seeds: npt.ArrayLike
+    ) -> tuple[
+        npt.NDArray[np.float32],
+        npt.NDArray[np.float64],
+        npt.NDArray[np.bool_],
+        npt.NDArray[np.bool_],
+        dict[str, Any],
+        npt.NDArray[np.float32],
+        npt.NDArray[np.bool_],
+    ]: ...
+    def summary(self, i: int) -> dict[str, Any]: ...
+    def __len__(self) -> int: ...
+    @property
+    def observation_len(self) -> int: ...

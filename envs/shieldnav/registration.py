@@ -27,4 +27,10 @@ def register_envs() -> None:
     for env_id, (kwargs, steps) in ENV_IDS.items():
         if env_id not in registry:
             # the episode knows its time limit too, so that its last step carries the summary
-            register(id=env_id, entry_point=_ENTRY, kwargs={**kwargs, "time_limit": steps}, max_episode_steps=steps)
+            register(
+                id=env_id,
+                entry_point=_ENTRY,
+                vector_entry_point="shieldnav.vector:make_vector",
+                kwargs={**kwargs, "time_limit": steps},
+                max_episode_steps=steps,
+            )

@@ -4,6 +4,7 @@
 
 use pyo3::prelude::*;
 
+mod batch;
 mod config;
 mod episode;
 mod errors;
@@ -19,5 +20,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     planner::register(m)?;
     world::register(m)?;
     episode::register(m)?;
+    batch::register(m)?;
     Ok(())
 }

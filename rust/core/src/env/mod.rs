@@ -20,11 +20,13 @@
 //! ```
 
 mod action;
+mod batch;
 mod coverage;
 mod deadlock;
 mod episode;
 mod observation;
 
+pub use batch::{AutoReset, Batch, SlotOutcome};
 pub use action::{check_action, nominal_command, ActionMode, ACTION_TOLERANCE};
 pub use coverage::{
     Coverage, CoverageConfig, Piece, COVERAGE_GRID, LINE_OF_SIGHT_TOLERANCE, PROBE_OFFSET,

@@ -1,0 +1,90 @@
+"""The native vector environment: make_vec returns it, its autoreset mode is declared and
+honoured, and a batch of N equals N single environments bit for bit."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import shieldnav  # noqa: F401
+from shieldnav import InvalidArgumentError
+from shieldnav.vector import CorridorInspectionVectorEnv
+
+ENV = "shieldnav/DynamicObstacles-v0"
+
+
+def actions(k: int, n: int) -> np.ndarray:
+    return np.random.default_rng(k).uniform(-1, 1, (n, 3)).astype(np.float32)
+
+
+def singles_next_step(env_id: str, n: int, seed: int, steps: int, **kwargs):
+    """N single environments driven with Gymnasium's next-step autoreset by hand."""
+    envs = [gym.make(env_id, max_episode_steps=kwargs["time_limit"], **kwargs) for _ in range(n)]
+    obs = [e.reset(seed=seed + i)[0] for i, e in enumerate(envs)]
+    done = [False] * n
+    out = []
+    for k in range(steps):
+        a = actions(k, n)
+        row = []
+        for i, e in enumerate(envs):
+            if done[i]:
+                obs[i], _ = e.reset()
+                row.append((obs[i], 0.0, False, False))
+                done[i] = False
+            else:
+                obs[i], r, te, tr, _ = e.step(a[i])
+                row.append((obs[i], r, te, tr))
+                done[i] = te or tr
+        out.append(row)
+    return out
+
+
+@pytest.mark.parametrize("env_id", [ENV, "shieldnav/CorridorInspection-v0"])
+def test_make_vec_gives_the_native_batch_equal_to_single_envs(env_id):
+    n, steps, limit = 3, 130, 60
+    v = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", max_episode_steps=limit, time_limit=limit)
+    assert isinstance(v, CorridorInspectionVectorEnv)
+    assert v.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
+    obs, _ = v.reset(seed=10)
+    ref = singles_next_step(env_id, n, 10, steps, time_limit=limit)
+    ends = 0
+    for k in range(steps):
+        obs, r, te, tr, info = v.step(actions(k, n))
+        for i in range(n):
+            o, rr, tte, ttr = ref[k][i]
+            assert obs[i].tobytes() == o.tobytes(), (k, i)
+            assert r[i] == rr and te[i] == tte and tr[i] == ttr, (k, i)
+        if "episode" in info:
+            ends += int(info["_episode"].sum())
+            assert np.all(info["episode"]["steps"][info["_episode"]] == limit)
+    assert ends == 2 * n, "every sub-environment hit the 60-step limit twice in 130 steps"
+
+
+def test_same_step_mode_returns_the_final_observation():
+    v = CorridorInspectionVectorEnv(2, preset="constricted_passage", autoreset_mode="same_step", max_episode_steps=5)
+    assert v.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    v.reset(seed=0)
+    single = gym.make("shieldnav/ConstrictedPassage-v0", max_episode_steps=5, time_limit=5)
+    single.reset(seed=0)
+    for k in range(5):
+        a = actions(k, 2)
+        obs, r, te, tr, info = v.step(a)
+        so, *_ = single.step(a[0])
+    assert tr.all() and "final_obs" in info and info["_final_obs"].all()
+    assert info["final_obs"][0].tobytes() == so.tobytes()
+    so, _ = single.reset()
+    assert obs[0].tobytes() == so.tobytes(), "the same step already starts the next episode"
+
+
+def test_bad_arguments_raise():
+    with pytest.raises(InvalidArgumentError, match="num_envs"):
+        CorridorInspectionVectorEnv(0, preset="constricted_passage")
+    with pytest.raises(InvalidArgumentError, match="autoreset_mode"):
+        CorridorInspectionVectorEnv(2, preset="constricted_passage", autoreset_mode="sometimes")
+    v = CorridorInspectionVectorEnv(2, preset="constricted_passage")
+    v.reset(seed=0)
+    with pytest.raises(InvalidArgumentError, match="actions"):
+        v.step(np.zeros((3, 3), np.float32))
+    with pytest.raises(InvalidArgumentError, match="action"):
+        v.step(np.full((2, 3), 2.0, np.float32))
