@@ -66,3 +66,19 @@ def test_interrupted_run_keeps_finished_episodes(monkeypatch):
     monkeypatch.setattr(benchmark, "run_local", source)
     results = benchmark.run(todo, "local", 1)
     assert len(results) == 1 and results[0]["task"]["shield"] == "composite"
+
+
+def test_ray_backend_gives_the_local_numbers(tmp_path):
+    import ray
+
+    args = ["--scenarios", "shieldnav/ConstrictedPassage-v0", "shieldnav/DynamicObstacles-v0", "--shields", "composite", "none",
+            "--seeds", "1", "--workers", "2", "--max-steps", "300", "--no-plots"]
+    local = benchmark.main(args + ["--out", str(tmp_path / "local")])
+    try:
+        remote = benchmark.main(args + ["--backend", "ray", "--out", str(tmp_path / "ray")])
+    finally:
+        ray.shutdown()
+    timing = ("shield_us_mean", "shield_us_p99_6", "shield_us_max", "steps_per_s")
+    assert local.keys() == remote.keys()
+    for key in local:
+        assert {k: v for k, v in local[key].items() if k not in timing} == {k: v for k, v in remote[key].items() if k not in timing}

@@ -104,7 +104,7 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         single.close()
 
     def reset(self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        super().reset(seed=seed)
+        super().reset(seed=seed if seed is None or isinstance(seed, int) else int(seed[0]))
         if options:
             raise InvalidArgumentError(f"invalid `options`: reset takes no options, got {sorted(options)}")
         if seed is None:

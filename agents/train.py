@@ -1,0 +1,144 @@
+"""Train PPO or SAC (stable-baselines3) on the corridor environments, with the shield in the
+loop (the policy's command is filtered during training, ``--shield composite``) or without
+(``--shield none``).
+
+Training runs on the native Rust batch (``shieldnav.sb3.ShieldnavVecEnv``, no subprocesses).
+An evaluation callback runs deterministic episodes on a separate environment and logs return,
+episodes with contact, deadlock rate and coverage; checkpoints and TensorBoard logs go to the
+run folder, and ``model.zip`` is what ``python -m agents.benchmark --policy`` loads.
+
+    python -m agents.train --algo ppo --env shieldnav/CorridorInspection-v0 --shield composite \\
+        --timesteps 200000 --num-envs 8 --seed 0 --out runs/ppo_composite
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import shieldnav  # noqa: F401  (registers the ids)
+from shieldnav.exceptions import InvalidArgumentError
+
+try:
+    import torch
+    from stable_baselines3 import PPO, SAC
+    from stable_baselines3.common.callbacks import BaseCallback, CallbackList, CheckpointCallback
+    from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
+except ImportError as err:  # pragma: no cover
+    raise ImportError('training needs stable-baselines3 and torch: pip install "shieldnav[train]"') from err
+
+from shieldnav.sb3 import ShieldnavVecEnv
+
+ALGOS = {"ppo": PPO, "sac": SAC}
+
+
+def evaluate(model: Any, env_id: str, episodes: int, seed: int, **kwargs: Any) -> dict[str, float]:
+    """Deterministic episodes of ``model`` on single environments seeded ``seed + k``."""
+    env = gym.make(env_id, **kwargs)
+    rows = []
+    for k in range(episodes):
+        obs, _ = env.reset(seed=seed + k)
+        ret, done = 0.0, False
+        while not done:
+            action, _ = model.predict(obs, deterministic=True)
+            obs, reward, terminated, truncated, info = env.step(action)
+            ret += float(reward)
+            done = terminated or truncated
+        s = info["shieldnav_episode"]
+        rows.append((ret, s["collisions"] > 0, s["deadlock"], s["coverage"], s["contact_time"]))
+    env.close()
+    r = np.asarray(rows, dtype=float)
+    return {"return": r[:, 0].mean(), "episodes_with_contact": r[:, 1].mean(), "deadlock_rate": r[:, 2].mean(),
+            "coverage": r[:, 3].mean(), "contact_time": r[:, 4].mean()}
+
+
+class EvalSafety(BaseCallback):
+    """Every ``every`` steps: evaluate and log ``eval/*`` (return, contact, deadlock, coverage)."""
+
+    def __init__(self, env_id: str, every: int, episodes: int, seed: int, env_kwargs: dict[str, Any]) -> None:
+        super().__init__()
+        self.env_id, self.every, self.episodes, self.seed, self.env_kwargs = env_id, every, episodes, seed, env_kwargs
+        self.history: list[dict[str, float]] = []
+        self._next = every
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self._next:
+            self._next += self.every
+            stats = evaluate(self.model, self.env_id, self.episodes, self.seed, **self.env_kwargs)
+            for k, v in stats.items():
+                self.logger.record(f"eval/{k}", v)
+            self.history.append({"timesteps": self.num_timesteps, **stats})
+        return True
+
+
+def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, seed: int, out: Path,
+          eval_every: int = 10_000, eval_episodes: int = 3, tensorboard: bool = True, progress: bool = True,
+          max_episode_steps: int | None = None, **env_kwargs: Any) -> Path:
+    """Trains and saves ``out/model.zip``; returns its path."""
+    if algo not in ALGOS:
+        raise InvalidArgumentError(f"invalid `algo`: expected one of {sorted(ALGOS)}, got {algo!r}")
+    if timesteps < 1 or num_envs < 1:
+        raise InvalidArgumentError("invalid `timesteps`/`num_envs`: must be at least 1")
+    out.mkdir(parents=True, exist_ok=True)
+    torch.manual_seed(seed)
+    torch.set_num_threads(1)
+    kwargs = {"shield": shield, **env_kwargs}
+    if max_episode_steps is not None:
+        kwargs["max_episode_steps"] = max_episode_steps
+    venv = VecCheckNan(VecMonitor(ShieldnavVecEnv(env_id, num_envs=num_envs, **kwargs)), raise_exception=True)
+    venv.seed(seed)
+    tb = None
+    if tensorboard:
+        try:
+            import tensorboard  # noqa: F401
+
+            tb = str(out / "tb")
+        except ImportError:
+            print("tensorboard not installed: no TensorBoard logs (pip install tensorboard)")
+    Algo = ALGOS[algo]
+    params: dict[str, Any] = {"n_steps": 256, "batch_size": 256} if algo == "ppo" else {"learning_starts": 1000}
+    model = Algo("MlpPolicy", venv, seed=seed, device="cpu", tensorboard_log=tb, verbose=0, **params)
+    eval_kwargs = {"shield": shield, **env_kwargs}
+    if max_episode_steps is not None:
+        eval_kwargs["max_episode_steps"] = eval_kwargs["time_limit"] = max_episode_steps
+    evaluator = EvalSafety(env_id, eval_every, eval_episodes, seed + 10_000, eval_kwargs)
+    checkpoints = CheckpointCallback(save_freq=max(eval_every // num_envs, 1), save_path=str(out / "checkpoints"), name_prefix=algo)
+    model.learn(timesteps, callback=CallbackList([evaluator, checkpoints]), progress_bar=progress, tb_log_name=f"{algo}_{shield}")
+    path = out / "model.zip"
+    model.save(path)
+    meta = {"algo": algo, "env_id": env_id, "shield": shield, "timesteps": timesteps, "num_envs": num_envs, "seed": seed,
+            "eval": evaluator.history, "env_kwargs": env_kwargs}
+    (out / "run.json").write_text(json.dumps(meta, indent=1))
+    venv.close()
+    return path
+
+
+def main(argv: list[str] | None = None) -> Path:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
+    ap.add_argument("--env", default="shieldnav/CorridorInspection-v0")
+    ap.add_argument("--shield", default="composite", choices=["composite", "distance", "hardmin", "none"])
+    ap.add_argument("--timesteps", type=int, default=200_000)
+    ap.add_argument("--num-envs", type=int, default=8)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--eval-every", type=int, default=10_000)
+    ap.add_argument("--eval-episodes", type=int, default=3)
+    ap.add_argument("--max-episode-steps", type=int, default=None)
+    ap.add_argument("--out", default=None, help="run folder (default runs/<algo>_<shield>_<seed>)")
+    ap.add_argument("--no-tensorboard", action="store_true")
+    ap.add_argument("--no-progress", action="store_true")
+    args = ap.parse_args(argv)
+    out = Path(args.out or f"runs/{args.algo}_{args.shield}_{args.seed}")
+    path = train(args.algo, args.env, args.shield, args.timesteps, args.num_envs, args.seed, out, args.eval_every,
+                 args.eval_episodes, not args.no_tensorboard, not args.no_progress, args.max_episode_steps)
+    print(f"saved {path}")
+    return path
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,92 @@
+"""A stable-baselines3 ``VecEnv`` over the native Rust batch: SB3 trains on N episodes without
+subprocesses.
+
+Follows SB3's same-step autoreset (``DummyVecEnv``): when an episode ends, the returned
+observation is the next episode's first, ``infos[i]["terminal_observation"]`` holds the last
+one, and ``infos[i]["TimeLimit.truncated"]`` tells a truncation from a termination. The
+episode totals are in ``infos[i]["shieldnav_episode"]`` (SB3's ``VecMonitor`` writes its own
+``episode`` key).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+try:
+    from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+except ImportError as err:  # pragma: no cover - exercised only without the extra
+    raise ImportError('shieldnav.sb3 needs stable-baselines3: pip install "shieldnav[train]"') from err
+
+import gymnasium as gym
+
+from shieldnav.vector import CorridorInspectionVectorEnv
+
+#: Per-step info entries copied into each sub-environment's info dict.
+_KEYS = ("cost", "collision", "clearance", "H", "h_min", "shield_active", "shield_feasible", "intervention",
+         "coverage", "deadlock", "odometry_error", "solve_time_ns", "u_nom", "u_filtered")
+
+
+class ShieldnavVecEnv(VecEnv):
+    """``ShieldnavVecEnv("shieldnav/CorridorInspection-v0", num_envs=8, shield="composite")``.
+
+    Keywords are those of the registered id (its registration kwargs are the defaults) plus
+    ``threads``; the id's time limit applies.
+    """
+
+    def __init__(self, env_id: str, num_envs: int = 1, threads: int | None = None, **kwargs: Any) -> None:
+        spec = gym.spec(env_id)
+        merged = {**spec.kwargs, **kwargs}
+        merged.setdefault("max_episode_steps", spec.max_episode_steps)
+        self.vec = CorridorInspectionVectorEnv(num_envs, autoreset_mode="same_step", threads=threads, **merged)
+        super().__init__(num_envs, self.vec.single_observation_space, self.vec.single_action_space)
+        self.env_id = env_id
+        self._actions: np.ndarray | None = None
+
+    def reset(self) -> np.ndarray:
+        seeds = None if self._seeds[0] is None else [int(s) for s in self._seeds]
+        obs, _ = self.vec.reset(seed=seeds)
+        self._reset_seeds()
+        return obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
+
+    def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+        assert self._actions is not None, "step_async first"
+        obs, reward, terminated, truncated, info = self.vec.step(self._actions)
+        dones = terminated | truncated
+        infos: list[dict[str, Any]] = []
+        for i in range(self.num_envs):
+            d = {k: info[k][i] for k in _KEYS if k in info}
+            if dones[i]:
+                d["terminal_observation"] = info["final_obs"][i]
+                d["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+                d["shieldnav_episode"] = {k: v[i].item() for k, v in info["episode"].items()}
+            infos.append(d)
+        return obs, reward.astype(np.float32), dones, infos
+
+    def close(self) -> None:
+        self.vec.close()
+
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        return [getattr(self.vec, attr_name) for _ in self._get_indices(indices)]
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        raise AttributeError(f"ShieldnavVecEnv sub-environments live in Rust; cannot set {attr_name!r}")
+
+    def env_method(self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any) -> list[Any]:
+        if method_name == "summary":
+            return [self.vec.summary(i) for i in self._get_indices(indices)]
+        raise AttributeError(f"ShieldnavVecEnv has no sub-environment method {method_name!r} (only 'summary')")
+
+    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
+        return [False for _ in self._get_indices(indices)]
+
+    def _get_indices(self, indices: None | int | Iterable[int]) -> Sequence[int]:
+        if indices is None:
+            return range(self.num_envs)
+        if isinstance(indices, int):
+            return [indices]
+        return list(indices)

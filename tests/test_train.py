@@ -1,0 +1,52 @@
+"""Training smoke test: PPO on the native batch, with the shield in the loop, saves a model the
+benchmark loads and evaluates; one seed gives identical results twice."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("torch")
+
+from agents import benchmark, train  # noqa: E402
+from shieldnav.sb3 import ShieldnavVecEnv  # noqa: E402
+
+
+def test_ppo_trains_saves_reloads_and_is_benchmarked_identically_twice(tmp_path):
+    rows = []
+    for run in ("a", "b"):
+        path = train.main([
+            "--algo", "ppo", "--env", "shieldnav/ConstrictedPassage-v0", "--shield", "composite", "--timesteps", "2048",
+            "--num-envs", "4", "--seed", "3", "--eval-every", "1024", "--eval-episodes", "1", "--max-episode-steps", "200",
+            "--out", str(tmp_path / run), "--no-progress", "--no-tensorboard",
+        ])
+        assert path.exists() and (tmp_path / run / "checkpoints").is_dir()
+        meta = json.loads((tmp_path / run / "run.json").read_text())
+        assert [e["timesteps"] for e in meta["eval"]] == [1024, 2048]
+        rows.append(benchmark.main([
+            "--scenarios", "shieldnav/ConstrictedPassage-v0", "--shields", "composite", "--seeds", "1", "--workers", "1",
+            "--policy", str(path), "--max-steps", "200", "--out", str(tmp_path / run / "bench"), "--no-plots",
+        ]))
+    a, b = (r[("shieldnav/ConstrictedPassage-v0", "composite")] for r in rows)
+    timeless = ("shield_us_mean", "shield_us_p99_6", "shield_us_max", "steps_per_s")
+    assert {k: v for k, v in a.items() if k not in timeless} == {k: v for k, v in b.items() if k not in timeless}
+    ea = json.loads((tmp_path / "a" / "bench" / "benchmark.json").read_text())["episodes"][0]["summary"]
+    eb = json.loads((tmp_path / "b" / "bench" / "benchmark.json").read_text())["episodes"][0]["summary"]
+    assert ea["path_length"] == eb["path_length"] and ea["total_reward"] == eb["total_reward"]
+
+
+def test_sb3_adapter_follows_same_step_autoreset():
+    v = ShieldnavVecEnv("shieldnav/ConstrictedPassage-v0", num_envs=2, max_episode_steps=5)
+    v.seed(0)
+    obs = v.reset()
+    assert obs.shape == (2, 73)
+    for k in range(5):
+        obs, rewards, dones, infos = v.step_wait() if v.step_async(np.zeros((2, 3), np.float32)) is None else None
+    assert dones.all() and rewards.dtype == np.float32
+    for i in range(2):
+        assert infos[i]["TimeLimit.truncated"] is True
+        assert infos[i]["terminal_observation"].shape == (73,)
+        assert infos[i]["shieldnav_episode"]["steps"] == 5
+        assert not np.array_equal(infos[i]["terminal_observation"], obs[i]), "obs is already the next episode's"
