@@ -4,7 +4,8 @@
 set -euo pipefail
 export MATURIN_PEP517_ARGS="--profile ci"
 source "$(dirname "$0")/env.sh" test
-echo "== cargo test (rust/core) =="
+echo "== installed in ${SECONDS} s; cargo test (rust/core) =="
 cargo test --quiet --profile ci
-echo "== pytest =="
-python -m pytest -q tests
+echo "== ${SECONDS} s; pytest =="
+python -m pytest -q --durations=8 tests
+echo "== done in ${SECONDS} s =="
