@@ -194,12 +194,8 @@ impl PyEpisode {
             let mut v = valid.readwrite();
             let ps = p.as_slice_mut().map_err(|e| invalid("points", e))?;
             let vs = v.as_slice_mut().map_err(|e| invalid("points", e))?;
-            for (row, &id) in self
-                .inner
-                .points()
-                .chunks_exact(3)
-                .zip(self.inner.point_ids())
-            {
+            let (points, ids) = self.inner.points();
+            for (row, &id) in points.chunks_exact(3).zip(&ids) {
                 let k = id as usize;
                 ps[3 * k] = row[0] as f32;
                 ps[3 * k + 1] = row[1] as f32;
@@ -212,7 +208,15 @@ impl PyEpisode {
 
     /// The latest scan's valid returns in the current body frame, float64 (n, 3).
     fn valid_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let p = self.inner.points();
+        let (p, _) = self.inner.points();
+        let n = p.len() / 3;
+        PyArray1::from_vec(py, p).reshape([n, 3])
+    }
+
+    /// The returns the shield sees this step, float32 (n, 3) in the current body frame: those
+    /// of `valid_points()` that can lie inside its crop radius.
+    fn shield_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let p = self.inner.shield_points();
         PyArray1::from_slice(py, p).reshape([p.len() / 3, 3])
     }
 
@@ -267,6 +271,7 @@ impl PyEpisode {
         let pts: Vec<f64> = self
             .inner
             .points()
+            .0
             .chunks_exact(3)
             .flat_map(|p| [pose.x + c * p[0] - s * p[1], pose.y + s * p[0] + c * p[1]])
             .collect();

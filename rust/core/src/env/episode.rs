@@ -222,9 +222,14 @@ pub struct Episode {
     deadlock: DeadlockMonitor,
     cos_el: Vec<Real>,
     /// Valid returns of the latest scan in the current body frame, `[x, y, z]` rows.
-    points: Vec<Real>,
-    /// Index in the scan of each row of `points`.
-    point_ids: Vec<u32>,
+    /// Scan indices of the valid returns that can lie inside the shield's crop radius until
+    /// the next scan (range at most `crop + near_margin`).
+    near_ids: Vec<u32>,
+    near_margin: Real,
+    /// Those returns moved into the current body frame, `[x, y, z]` rows, for the shield.
+    shield_points: Vec<f32>,
+    /// The range bins of the latest scan (the observation's first block).
+    bins: Vec<f32>,
     last_estimate: Pose2,
     estimate_change: Pose2,
     velocity: [Real; 3],
@@ -313,8 +318,10 @@ impl Episode {
             coverage,
             deadlock,
             cos_el,
-            points: Vec::new(),
-            point_ids: Vec::new(),
+            near_ids: Vec::new(),
+            near_margin: 0.0,
+            shield_points: Vec::new(),
+            bins: Vec::new(),
             last_estimate: Pose2::default(),
             estimate_change: Pose2::default(),
             velocity: [0.0; 3],
@@ -371,6 +378,7 @@ impl Episode {
         self.solve_time_sum = 0.0;
         self.in_contact = false;
         self.last_shield = None;
+        self.index_scan();
         self.compensate_points();
         self.inspect();
         let p = self.world.true_pose();
@@ -400,24 +408,50 @@ impl Episode {
             .update(self.world.scan(), &el, self.config.planner.fov_h, range)
     }
 
-    /// Moves the latest scan's valid returns into the current body frame (the robot's own
-    /// short-horizon motion since the scan, which the odometry faults do not touch).
-    fn compensate_points(&mut self) {
+    /// The robot's motion since the latest scan: the pose of the scan's body frame in the
+    /// current one (its own short-horizon motion, which the odometry faults do not touch).
+    fn since_scan(&self) -> Pose2 {
+        self.world.true_pose().between(&self.world.scan_body_pose())
+    }
+
+    /// After a scan: the range bins, and which returns the shield may need until the next one.
+    /// A return at range `r` lies at least `r − |t|` from the robot after it moved by `t`, so
+    /// returns beyond `crop + margin` stay outside the crop while `|t| ≤ margin`.
+    fn index_scan(&mut self) {
         let scan = self.world.scan();
-        let rel = self.world.true_pose().between(&self.world.scan_body_pose());
-        let (s, c) = rel.yaw.sin_cos();
-        self.points.clear();
-        self.point_ids.clear();
-        for (k, p) in scan.points.iter().enumerate() {
-            if p[0].is_nan() {
-                continue;
+        let lidar = self.config.world.lidar;
+        self.bins.resize(self.config.observation.bins, 1.0);
+        bin_ranges(scan, &self.cos_el, lidar.max_range, &mut self.bins);
+        let t = &self.config.world.tracker;
+        self.near_margin = t.v_max[0].hypot(t.v_max[1]) / lidar.rate_hz + 0.05;
+        self.select_near();
+    }
+
+    fn select_near(&mut self) {
+        let scan = self.world.scan();
+        let limit = self.config.shield.scan.crop_radius.map_or(Real::INFINITY, |c| c + self.near_margin);
+        self.near_ids.clear();
+        for (k, (p, r)) in scan.points.iter().zip(&scan.ranges).enumerate() {
+            if !p[0].is_nan() && *r <= limit {
+                self.near_ids.push(k as u32);
             }
-            self.points.extend_from_slice(&[
-                rel.x + c * p[0] - s * p[1],
-                rel.y + s * p[0] + c * p[1],
-                p[2],
-            ]);
-            self.point_ids.push(k as u32);
+        }
+    }
+
+    /// Moves the returns the shield may need into the current body frame (`f32` rows).
+    fn compensate_points(&mut self) {
+        let rel = self.since_scan();
+        if rel.x.hypot(rel.y) > self.near_margin {
+            // pushed farther than the tracker's limits allow (a moving obstacle): widen
+            self.near_margin = 2.0 * rel.x.hypot(rel.y);
+            self.select_near();
+        }
+        let (s, c) = rel.yaw.sin_cos();
+        let pts = &self.world.scan().points;
+        self.shield_points.clear();
+        for &k in &self.near_ids {
+            let p = pts[k as usize];
+            self.shield_points.extend_from_slice(&[(rel.x + c * p[0] - s * p[1]) as f32, (rel.y + s * p[0] + c * p[1]) as f32, p[2] as f32]);
         }
     }
 
@@ -435,7 +469,7 @@ impl Episode {
         )?;
         let w_max = self.config.world.tracker.w_max;
         let omega = u_nom[2].clamp(-w_max, w_max);
-        let scan = PointScan::new_f64(&self.points, 3)?;
+        let scan = PointScan::new_f32(&self.shield_points, 3)?;
         let out = self
             .shield
             .filter(&scan, &BodyState::planar(0.0, omega)?, &u_nom[..2])?;
@@ -443,6 +477,9 @@ impl Episode {
         let intervention = (u[0] - u_nom[0]).hypot(u[1] - u_nom[1]);
         let before = self.world.true_pose();
         let step = self.world.step(u)?;
+        if step.scanned {
+            self.index_scan();
+        }
         self.compensate_points();
         let new_coverage = if step.scanned { self.inspect() } else { 0.0 };
         let clearance = self.world.clearance();
@@ -529,13 +566,7 @@ impl Episode {
                 got: out.len(),
             });
         }
-        let lidar = self.config.world.lidar;
-        bin_ranges(
-            self.world.scan(),
-            &self.cos_el,
-            lidar.max_range,
-            &mut out[..bins],
-        );
+        out[..bins].copy_from_slice(&self.bins);
         let t = &self.config.world.tracker;
         let scale = [t.v_max[0], t.v_max[1], t.w_max];
         let d = self.estimate_change;
@@ -555,14 +586,26 @@ impl Episode {
         self.config.observation.len()
     }
 
-    /// Valid returns of the latest scan in the current body frame, `[x, y, z]` rows (m).
-    pub fn points(&self) -> &[Real] {
-        &self.points
+    /// Every valid return of the latest scan in the current body frame, `[x, y, z]` rows (m),
+    /// with its scan index (`channel · columns + column`). Computed on each call.
+    pub fn points(&self) -> (Vec<Real>, Vec<u32>) {
+        let rel = self.since_scan();
+        let (s, c) = rel.yaw.sin_cos();
+        let mut out = Vec::with_capacity(3 * self.world.scan().points.len());
+        let mut ids = Vec::with_capacity(self.world.scan().points.len());
+        for (k, p) in self.world.scan().points.iter().enumerate() {
+            if !p[0].is_nan() {
+                out.extend_from_slice(&[rel.x + c * p[0] - s * p[1], rel.y + s * p[0] + c * p[1], p[2]]);
+                ids.push(k as u32);
+            }
+        }
+        (out, ids)
     }
 
-    /// Scan index (`channel · columns + column`) of each row of [`Episode::points`].
-    pub fn point_ids(&self) -> &[u32] {
-        &self.point_ids
+    /// The returns the shield sees this step (`f32` rows `[x, y, z]`, current body frame):
+    /// those of [`Episode::points`] that can lie inside its crop radius.
+    pub fn shield_points(&self) -> &[f32] {
+        &self.shield_points
     }
 
     /// The world.
