@@ -1,0 +1,116 @@
+//! Rows of bits: one grid row packed 64 cells to a word (cell `i` is bit `i % 64` of word
+//! `i / 64`), with the shifts and erosions the footprint search runs on whole words.
+//!
+//! Bits past the row's last cell are always 0, and cells off either end of a row read as 0
+//! (blocked), so an erosion never reaches outside the grid.
+
+use super::grid::Cell;
+
+/// Number of words holding `cells` bits.
+#[inline]
+pub(crate) fn words_for(cells: usize) -> usize {
+    cells.div_ceil(64)
+}
+
+/// Packs the free cells of `row` into `out` (1 = [`Cell::Free`]).
+pub(crate) fn pack_free(row: &[Cell], out: &mut [u64]) {
+    for (w, chunk) in out.iter_mut().zip(row.chunks(64)) {
+        let mut m = 0u64;
+        for (b, c) in chunk.iter().enumerate() {
+            m |= ((*c == Cell::Free) as u64) << b;
+        }
+        *w = m;
+    }
+}
+
+/// Word `k` of `src` shifted by `d` cells: bit `i` of the result is cell `i + d` of `src`
+/// (0 off either end).
+#[inline(always)]
+pub(crate) fn shifted_word(src: &[u64], k: usize, d: i32) -> u64 {
+    let (q, r) = (d.div_euclid(64) as isize, d.rem_euclid(64) as u32);
+    let at = |m: isize| if m >= 0 && (m as usize) < src.len() { src[m as usize] } else { 0 };
+    let base = k as isize + q;
+    if r == 0 {
+        at(base)
+    } else {
+        (at(base) >> r) | (at(base + 1) << (64 - r))
+    }
+}
+
+/// `dst[k] &= (src shifted by d)[k]` for the words `k` in `range` (see [`shifted_word`]).
+#[inline]
+pub(crate) fn and_shifted(dst: &mut [u64], src: &[u64], d: i32, range: std::ops::Range<usize>) {
+    for k in range {
+        dst[k] &= shifted_word(src, k, d);
+    }
+}
+
+/// Horizontal erosion: cell `i` of `out` is set iff cells `i − w ..= i + w` of `src` all are.
+/// `tmp` is scratch of the same length.
+pub(crate) fn erode(src: &[u64], w: usize, out: &mut [u64], tmp: &mut [u64]) {
+    debug_assert!(out.len() == src.len() && tmp.len() == src.len());
+    let span = 2 * w + 1;
+    // out(i) = cells i .. i + p all set, doubling p up to the largest power of two <= span
+    out.copy_from_slice(src);
+    let mut p = 1;
+    while 2 * p <= span {
+        tmp.copy_from_slice(out);
+        and_shifted(out, tmp, p as i32, 0..src.len());
+        p *= 2;
+    }
+    // span = p + (span - p): cells i .. i + span all set, then centre the window on i
+    if span > p {
+        tmp.copy_from_slice(out);
+        and_shifted(out, tmp, (span - p) as i32, 0..src.len());
+    }
+    tmp.copy_from_slice(out);
+    for k in 0..src.len() {
+        out[k] = shifted_word(tmp, k, -(w as i32));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bit(row: &[u64], i: i64) -> bool {
+        i >= 0 && (i as usize) < row.len() * 64 && row[i as usize / 64] >> (i % 64) & 1 == 1
+    }
+
+    fn pattern(n: usize, seed: u64) -> Vec<Cell> {
+        let mut s = seed;
+        (0..n)
+            .map(|_| {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                if (s >> 33) % 7 == 0 { Cell::Occupied } else { Cell::Free }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn shifts_and_erosion_match_brute_force() {
+        for (n, seed) in [(1, 1), (63, 2), (64, 3), (65, 4), (200, 5), (517, 6)] {
+            let cells = pattern(n, seed);
+            let mut row = vec![0; words_for(n)];
+            pack_free(&cells, &mut row);
+            let free = |i: i64| i >= 0 && (i as usize) < n && cells[i as usize] == Cell::Free;
+            for i in 0..row.len() as i64 * 64 {
+                assert_eq!(bit(&row, i), free(i), "pack {n} {i}");
+            }
+            for d in [-130, -64, -63, -17, -1, 0, 1, 5, 63, 64, 100] {
+                let s: Vec<u64> = (0..row.len()).map(|k| shifted_word(&row, k, d)).collect();
+                for i in 0..row.len() as i64 * 64 {
+                    assert_eq!(bit(&s, i), free(i + d as i64), "shift {n} {d} {i}");
+                }
+            }
+            for w in [0, 1, 2, 3, 7, 12, 31, 40] {
+                let (mut out, mut tmp) = (vec![0; row.len()], vec![0; row.len()]);
+                erode(&row, w, &mut out, &mut tmp);
+                for i in 0..row.len() as i64 * 64 {
+                    let want = (i - w as i64..=i + w as i64).all(free);
+                    assert_eq!(bit(&out, i), want, "erode {n} {w} {i}");
+                }
+            }
+        }
+    }
+}
