@@ -17,7 +17,7 @@
 //! on out of thousands.
 
 use super::bitrow::{and_shifted, erode, pack_free, words_for};
-use super::grid::{Cell, OccupancyGrid};
+use super::grid::{rows_equal, OccupancyGrid};
 use crate::math::Real;
 
 /// Orientations of the search: the 16 headings modulo the footprint's half-turn symmetry.
@@ -100,11 +100,6 @@ impl Space {
     }
 }
 
-/// Whether two rows of cells are equal (no early exit, so it vectorises).
-fn rows_equal(a: &[Cell], b: &[Cell]) -> bool {
-    a.chunks(64).zip(b.chunks(64)).all(|(x, y)| x.iter().zip(y).fold(true, |acc, (p, q)| acc & (p == q)))
-}
-
 /// First and one-past-last nonzero word of `row` (an empty range if none).
 fn nonzero_range(row: &[u64]) -> (usize, usize) {
     match row.iter().position(|w| *w != 0) {
@@ -144,8 +139,8 @@ pub(crate) fn build(grid: &OccupancyGrid, cover: &Cover) -> Space {
     let mut free_id = vec![0u32; h];
     let mut packed = vec![0u64; nw];
     for j in 0..h {
-        let row = &grid.cells[j * w..(j + 1) * w];
-        if j > 0 && rows_equal(row, &grid.cells[(j - 1) * w..j * w]) {
+        let row = grid.row(j);
+        if j > 0 && rows_equal(row, grid.row(j - 1)) {
             free_id[j] = free_id[j - 1];
         } else {
             pack_free(row, &mut packed);

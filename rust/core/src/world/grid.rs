@@ -105,28 +105,52 @@ impl OccupancyGrid {
         (j0..=j1).all(|j| (i0..=i1).all(|i| self.get(i as usize, j as usize) == c))
     }
 
+    /// Row `j` of cells.
+    #[inline]
+    pub fn row(&self, j: usize) -> &[Cell] {
+        &self.cells[j * self.width..(j + 1) * self.width]
+    }
+
     /// The boundary of the solid cells (those for which `solid` holds) as one-sided wall
     /// segments of `height` (m), the solid on each wall's left: every cell edge with a solid
     /// cell on exactly one side (the grid's outside is not solid), collinear neighbouring edges
-    /// with the solid on the same side merged into one straight run.
+    /// with the solid on the same side merged into one straight run. Horizontal walls come
+    /// first, by row then column; then vertical walls, by column then row.
+    ///
+    /// Only rows that differ from the row below are scanned, so a grid of long straight walls
+    /// costs little more than one pass comparing rows.
     pub fn wall_segments(&self, height: Real, solid: impl Fn(Cell) -> bool) -> Vec<Segment> {
         let (w, h) = (self.width, self.height);
-        let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h && solid(self.get(i as usize, j as usize));
         let r = self.resolution;
         let mut out = Vec::new();
-        let mut emit = |p: Point2, q: Point2, solid_left_when_forward: bool| {
+        let emit = |out: &mut Vec<Segment>, p: Point2, q: Point2, solid_left_when_forward: bool| {
             let (p, q) = (self.grid_to_world(p), self.grid_to_world(q));
             out.push(if solid_left_when_forward { Segment::one_sided(p, q, height) } else { Segment::one_sided(q, p, height) });
         };
-        // horizontal edges on grid line y = j, between rows j-1 and j; side: solid above?
-        for j in 0..=h as i64 {
-            let mut run: Option<(i64, bool)> = None;
-            for i in 0..=w as i64 {
-                let edge = (i < w as i64 && occ(i, j - 1) != occ(i, j)).then(|| occ(i, j));
-                if let Some((i0, above)) = run {
-                    if edge != Some(above) {
+        // solid flags of the rows below and above grid line y = j (off the grid: not solid)
+        let (mut below, mut above) = (vec![false; w], vec![false; w]);
+        // per vertical grid line x = i, the open run of edges: (first row, solid on the left)
+        let mut open: Vec<Option<(usize, bool)>> = vec![None; w + 1];
+        let mut vertical: Vec<(usize, usize, usize, bool)> = Vec::new();
+        for j in 0..=h {
+            if j > 0 && j < h && rows_equal(self.row(j), self.row(j - 1)) {
+                continue; // no horizontal edge on this line, the vertical runs go on
+            }
+            if j < h {
+                for (a, c) in above.iter_mut().zip(self.row(j)) {
+                    *a = solid(*c);
+                }
+            } else {
+                above.fill(false);
+            }
+            // horizontal edges on grid line y = j; side: solid above?
+            let mut run: Option<(usize, bool)> = None;
+            for i in 0..=w {
+                let edge = (i < w && below[i] != above[i]).then(|| above[i]);
+                if let Some((i0, up)) = run {
+                    if edge != Some(up) {
                         // +x has +y on its left: forward when the solid is above
-                        emit([i0 as Real * r, j as Real * r], [i as Real * r, j as Real * r], above);
+                        emit(&mut out, [i0 as Real * r, j as Real * r], [i as Real * r, j as Real * r], up);
                         run = None;
                     }
                 }
@@ -134,23 +158,25 @@ impl OccupancyGrid {
                     run = edge.map(|s| (i, s));
                 }
             }
-        }
-        // vertical edges on grid line x = i, between columns i-1 and i; side: solid left (-x)?
-        for i in 0..=w as i64 {
-            let mut run: Option<(i64, bool)> = None;
-            for j in 0..=h as i64 {
-                let edge = (j < h as i64 && occ(i - 1, j) != occ(i, j)).then(|| occ(i - 1, j));
-                if let Some((j0, left)) = run {
-                    if edge != Some(left) {
-                        // +y has -x on its left: forward when the solid is at -x
-                        emit([i as Real * r, j0 as Real * r], [i as Real * r, j as Real * r], left);
-                        run = None;
+            // vertical edges of row j on grid lines x = i; side: solid at -x?
+            for (i, slot) in open.iter_mut().enumerate() {
+                let (left, right) = (i > 0 && above[i - 1], i < w && above[i]);
+                let edge = (j < h && left != right).then_some(left);
+                match *slot {
+                    Some((_, side)) if edge == Some(side) => {}
+                    Some((j0, side)) => {
+                        vertical.push((i, j0, j, side));
+                        *slot = edge.map(|s| (j, s));
                     }
-                }
-                if run.is_none() {
-                    run = edge.map(|s| (j, s));
+                    None => *slot = edge.map(|s| (j, s)),
                 }
             }
+            std::mem::swap(&mut below, &mut above);
+        }
+        vertical.sort_unstable_by_key(|v| (v.0, v.1));
+        for (i, j0, j1, left) in vertical {
+            // +y has -x on its left: forward when the solid is at -x
+            emit(&mut out, [i as Real * r, j0 as Real * r], [i as Real * r, j1 as Real * r], left);
         }
         out
     }
@@ -196,6 +222,11 @@ impl OccupancyGrid {
             }
         }
     }
+}
+
+/// Whether two rows of cells are equal (no early exit within 64 cells, so it vectorises).
+pub(crate) fn rows_equal(a: &[Cell], b: &[Cell]) -> bool {
+    a.len() == b.len() && a.chunks(64).zip(b.chunks(64)).all(|(x, y)| x.iter().zip(y).fold(true, |acc, (p, q)| acc & (p == q)))
 }
 
 /// 1D squared distance transform of sampled function `f` into `d`.
@@ -251,6 +282,78 @@ mod tests {
             let right = [m[0] + 0.01 * e[1].signum(), m[1] - 0.01 * e[0].signum()];
             let left = [m[0] - 0.01 * e[1].signum(), m[1] + 0.01 * e[0].signum()];
             assert!(s.one_sided && s.faces(right) && !s.faces(left) && !inside(right) && inside(left), "{s:?}");
+        }
+    }
+
+    /// The cell-by-cell scan `wall_segments` replaced: every line, every cell.
+    fn wall_segments_reference(g: &OccupancyGrid, height: Real, solid: impl Fn(Cell) -> bool) -> Vec<Segment> {
+        let (w, h) = (g.width, g.height);
+        let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h && solid(g.get(i as usize, j as usize));
+        let r = g.resolution;
+        let mut out = Vec::new();
+        let mut emit = |p: Point2, q: Point2, fwd: bool| {
+            let (p, q) = (g.grid_to_world(p), g.grid_to_world(q));
+            out.push(if fwd { Segment::one_sided(p, q, height) } else { Segment::one_sided(q, p, height) });
+        };
+        for j in 0..=h as i64 {
+            let mut run: Option<(i64, bool)> = None;
+            for i in 0..=w as i64 {
+                let edge = (i < w as i64 && occ(i, j - 1) != occ(i, j)).then(|| occ(i, j));
+                if let Some((i0, above)) = run {
+                    if edge != Some(above) {
+                        emit([i0 as Real * r, j as Real * r], [i as Real * r, j as Real * r], above);
+                        run = None;
+                    }
+                }
+                if run.is_none() {
+                    run = edge.map(|s| (i, s));
+                }
+            }
+        }
+        for i in 0..=w as i64 {
+            let mut run: Option<(i64, bool)> = None;
+            for j in 0..=h as i64 {
+                let edge = (j < h as i64 && occ(i - 1, j) != occ(i, j)).then(|| occ(i - 1, j));
+                if let Some((j0, left)) = run {
+                    if edge != Some(left) {
+                        emit([i as Real * r, j0 as Real * r], [i as Real * r, j as Real * r], left);
+                        run = None;
+                    }
+                }
+                if run.is_none() {
+                    run = edge.map(|s| (j, s));
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn wall_segments_match_the_cell_by_cell_scan() {
+        let mut s = 7u64;
+        let mut next = |n: usize| {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 33) as usize % n
+        };
+        for case in 0..40 {
+            let (w, h) = (1 + next(70), 1 + next(50));
+            let mut g = OccupancyGrid::new(w, h, 0.05, Pose2::new(1.0, -2.0, 0.3 * case as Real), Cell::Free).unwrap();
+            for _ in 0..next(12) {
+                let (x0, y0) = (next(w), next(h));
+                let (x1, y1) = ((x0 + next(30)).min(w - 1), (y0 + next(30)).min(h - 1));
+                let c = [Cell::Occupied, Cell::Unknown, Cell::Free][next(3)];
+                for j in y0..=y1 {
+                    for i in x0..=x1 {
+                        g.set(i, j, c);
+                    }
+                }
+            }
+            for _ in 0..next(20) {
+                g.set(next(w), next(h), Cell::Occupied);
+            }
+            for solid in [|c: Cell| c == Cell::Occupied, |c: Cell| c != Cell::Free] {
+                assert_eq!(g.wall_segments(2.0, solid), wall_segments_reference(&g, 2.0, solid), "case {case}");
+            }
         }
     }
 
