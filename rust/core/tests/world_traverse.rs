@@ -99,3 +99,22 @@ fn row_search_matches_brute_force_on_a_generated_site() {
         assert!(n > 10_000);
     }
 }
+
+#[test]
+fn row_search_matches_brute_force_on_wide_and_fine_grids() {
+    // rows of more than 64 words (a multi-word change mask) and disc offsets of 64 cells or more
+    for (w, h, res, fp) in [(4500, 50, 0.05, Footprint::default()), (1400, 200, 0.005, Footprint { length: 0.7, width: 0.3 })] {
+        let mut g = OccupancyGrid::new(w, h, res, Pose2::default(), Cell::Occupied).unwrap();
+        let (wm, hm) = (w as f64 * res, h as f64 * res);
+        g.fill_rect(0.02 * wm, 0.15 * hm, 0.98 * wm, 0.85 * hm, Cell::Free);
+        let mut rng = ChaCha8Rng::seed_from_u64(w as u64);
+        for _ in 0..w / 150 {
+            let x = rng.random_range(0.2 * wm..0.9 * wm);
+            let (y0, y1) = if rng.random_bool(0.5) { (0.0, rng.random_range(0.3..0.6) * hm) } else { (rng.random_range(0.4..0.7) * hm, hm) };
+            g.fill_rect(x, y0, x + rng.random_range(0.01..0.05) * wm, y1, Cell::Occupied);
+        }
+        let start = Pose2::new(0.1 * wm, 0.5 * hm, 0.0);
+        let n = compare(&g, fp, 0.0, start, &format!("{w} x {h} at {res}"));
+        assert!(n > 1000, "{w} x {h}: {n}");
+    }
+}

@@ -12,14 +12,27 @@ pub(crate) fn words_for(cells: usize) -> usize {
     cells.div_ceil(64)
 }
 
+/// Eight cells as the bytes of a word, cell 0 in the lowest byte.
+#[inline(always)]
+pub(crate) fn cell_bytes(c: &[Cell]) -> u64 {
+    u64::from_le_bytes(std::array::from_fn(|i| c[i] as u8))
+}
+
 /// Packs the free cells of `row` into `out` (1 = [`Cell::Free`]).
 pub(crate) fn pack_free(row: &[Cell], out: &mut [u64]) {
-    for (w, chunk) in out.iter_mut().zip(row.chunks(64)) {
-        let mut m = 0u64;
-        for (b, c) in chunk.iter().enumerate() {
-            m |= ((*c == Cell::Free) as u64) << b;
-        }
-        *w = m;
+    const LOW: u64 = 0x0101_0101_0101_0101;
+    for (k, w) in out.iter_mut().enumerate() {
+        let chunk = &row[k * 64..row.len().min((k + 1) * 64)];
+        *w = if chunk.len() == 64 {
+            chunk.chunks_exact(8).enumerate().fold(0, |m, (b, c)| {
+                // a byte's low bit: set iff the cell (0, 1 or 2) is not free; flipped, gathered
+                let x = cell_bytes(c);
+                let free = ((x | (x >> 1)) & LOW) ^ LOW;
+                m | (free.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * b)
+            })
+        } else {
+            chunk.iter().enumerate().fold(0, |m, (b, c)| m | ((*c == Cell::Free) as u64) << b)
+        };
     }
 }
 

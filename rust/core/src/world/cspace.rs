@@ -11,12 +11,13 @@
 //!    joined in a union-find. A run's cells are connected along the run, so joining runs is
 //!    the same as a breadth-first search over single configurations, only per run.
 //!
-//! Consecutive identical rows are computed once: a row of `E` (`F_k`) is recomputed only if a
-//! row it depends on differs from its predecessor, and identical consecutive rows of `F_k`
+//! Consecutive identical rows are computed once: a row of `E` is recomputed only if a free
+//! row it depends on differs from its predecessor, a row of `F_k` only in the words where an
+//! `E` row it reads differs from its predecessor, and identical consecutive rows of `F_k`
 //! share their runs. On a site of long straight walls this leaves a few hundred rows to work
 //! on out of thousands.
 
-use super::bitrow::{and_shifted, erode, pack_free, words_for};
+use super::bitrow::{erode, pack_free, shifted_word, words_for};
 use super::grid::{rows_equal, OccupancyGrid};
 use crate::math::Real;
 
@@ -32,6 +33,7 @@ pub(crate) struct Cover {
     /// `widths[|dy|]`: erosion half-width of row `j + dy` for `E(j)`, `|dy| <= D`.
     pub widths: Vec<usize>,
     /// The clearance a disc's cell needs (m), centre to centre.
+    #[allow(dead_code)] // read by the move-sweep test of `traverse`
     pub need: Real,
 }
 
@@ -108,7 +110,8 @@ fn nonzero_range(row: &[u64]) -> (usize, usize) {
     }
 }
 
-/// Rows of bits stored once each, with the nonzero word range of each.
+/// Rows of bits stored once each, with the nonzero word range of each. Each row is stored
+/// between two zero words, so a shift by less than 64 cells reads no bounds.
 struct Pool {
     words: usize,
     data: Vec<u64>,
@@ -118,13 +121,21 @@ struct Pool {
 impl Pool {
     /// A pool whose row 0 is all zeros.
     fn new(words: usize) -> Self {
-        Self { words, data: vec![0; words], range: vec![(0, 0)] }
+        Self { words, data: vec![0; words + 2], range: vec![(0, 0)] }
     }
+    /// Row `r`.
     fn row(&self, r: u32) -> &[u64] {
-        &self.data[r as usize * self.words..(r as usize + 1) * self.words]
+        &self.padded(r)[1..=self.words]
+    }
+    /// Row `r` with its zero words before and after.
+    fn padded(&self, r: u32) -> &[u64] {
+        let n = self.words + 2;
+        &self.data[r as usize * n..(r as usize + 1) * n]
     }
     fn push(&mut self, row: &[u64]) -> u32 {
+        self.data.push(0);
         self.data.extend_from_slice(row);
+        self.data.push(0);
         self.range.push(nonzero_range(row));
         (self.range.len() - 1) as u32
     }
@@ -200,60 +211,126 @@ fn clearance_rows(free: &Pool, free_id: &[u32], cover: &Cover, nw: usize) -> (Ve
     (e_idx, e)
 }
 
+/// For each row `t` of `E` from `-1` to `h` (at `t + 1`), a mask of the words in which it
+/// differs from row `t - 1` (rows off the grid are zero), `mask_words` u64 per row.
+fn row_changes(e: &Pool, e_idx: &[u32], mask_words: usize) -> Vec<u64> {
+    let h = e_idx.len() as i64;
+    let at = |t: i64| if t < 0 || t >= h { 0 } else { e_idx[t as usize] };
+    let mut masks = vec![0u64; (h as usize + 2) * mask_words];
+    for t in -1..=h {
+        let (a, b) = (at(t - 1), at(t));
+        if a != b {
+            let mask = &mut masks[(t + 1) as usize * mask_words..(t + 2) as usize * mask_words];
+            for (q, (x, y)) in e.row(a).iter().zip(e.row(b)).enumerate() {
+                mask[q / 64] |= ((x != y) as u64) << (q % 64);
+            }
+        }
+    }
+    masks
+}
+
 /// The rows of every `F_k`, cut into runs and joined into components.
+///
+/// Row `j` of `F_k` differs from row `j - 1` only in the words next to where one of the `E`
+/// rows it reads differs from the row before; those words alone are recomputed.
 fn footprint_rows(e: &Pool, e_idx: &[u32], cover: &Cover, w: usize, h: usize) -> Space {
     let nw = words_for(w);
+    let mw = words_for(nw);
     let eat = |t: i64| if t < 0 || t >= h as i64 { 0 } else { e_idx[t as usize] };
-    // e_changes[t + 1]: row t of E differs from row t - 1 (rows off the grid are zero)
-    let e_changes: Vec<bool> = (-1..=h as i64).map(|t| eat(t) != eat(t - 1)).collect();
-    let changed = |t: i64| t >= -1 && t <= h as i64 && e_changes[(t + 1) as usize];
+    let changes = row_changes(e, e_idx, mw);
     let last_mask = if w % 64 == 0 { !0 } else { (1u64 << (w % 64)) - 1 };
     let mut space = Space { height: h, row_group: vec![0; ORIENTATIONS * h], groups: vec![(0, 0)], runs: Vec::new(), parent: Vec::new() };
-    let (mut cur, mut new) = (vec![0u64; nw], vec![0u64; nw]);
+    let mut cur = vec![0u64; nw];
+    // per row of F_k, the words to recompute (mw u64 of word bits per row)
+    let mut todo = vec![0u64; h * mw];
+    let mut todo_rows: Vec<usize> = Vec::new();
+    let changed_rows: Vec<i64> = (-1..=h as i64).filter(|t| changes[(t + 1) as usize * mw..(t + 2) as usize * mw].iter().any(|m| *m != 0)).collect();
+    // the E rows of the discs, zero-padded, with their shifts
+    let mut rows: Vec<(&[u64], i32)> = Vec::new();
     for (k, offsets) in cover.offsets.iter().enumerate() {
-        cur.fill(0);
-        let (mut cur_range, mut new_range) = ((0, 0), (0, 0));
-        let mut group = 0u32;
-        for j in 0..h {
-            let jj = j as i64;
-            if j > 0 && !offsets.iter().any(|&(_, dy)| changed(jj + dy as i64)) {
-                space.row_group[k * h + j] = group;
-                continue;
-            }
-            // the words that can be nonzero: where every shifted E row can be
-            let (mut lo, mut hi) = (0usize, nw);
+        // a word of F reads the words of E up to `reach` away
+        let reach = offsets.iter().map(|&(dx, _)| (dx.unsigned_abs() as usize).div_ceil(64)).max().unwrap_or(0);
+        // scatter each change of E to the rows of F_k that read it
+        todo_rows.clear();
+        for &t in &changed_rows {
             for &(_, dy) in offsets {
-                let (a, b) = e.range[eat(jj + dy as i64) as usize];
-                lo = lo.max(a.saturating_sub(1));
-                hi = hi.min((b + 1).min(nw));
-            }
-            new[new_range.0..new_range.1].fill(0);
-            new_range = if lo < hi { (lo, hi) } else { (0, 0) };
-            if lo < hi {
-                new[lo..hi].fill(!0);
-                for &(dx, dy) in offsets {
-                    and_shifted(&mut new, e.row(eat(jj + dy as i64)), dx, lo..hi);
+                let j = t - dy as i64;
+                if (0..h as i64).contains(&j) {
+                    let j = j as usize;
+                    let mask = &changes[(t + 1) as usize * mw..(t + 2) as usize * mw];
+                    let dst = &mut todo[j * mw..(j + 1) * mw];
+                    if dst.iter().all(|m| *m == 0) {
+                        todo_rows.push(j);
+                    }
+                    for (a, b) in dst.iter_mut().zip(mask) {
+                        *a |= b;
+                    }
                 }
-                new[nw - 1] &= last_mask;
             }
-            let span = cur_range.0.min(new_range.0)..cur_range.1.max(new_range.1);
-            if j > 0 && cur[span.clone()] == new[span] {
+        }
+        todo_rows.sort_unstable();
+        todo_rows.dedup();
+        // row -1 of F_k is zero: some disc sits at or below the centre row, where E is zero
+        cur.fill(0);
+        let mut group = 0u32;
+        let mut next_row = 0;
+        for &j in &todo_rows {
+            space.row_group[k * h + next_row..k * h + j].fill(group);
+            next_row = j + 1;
+            let words = &mut todo[j * mw..(j + 1) * mw];
+            for _ in 0..reach {
+                grow(words);
+            }
+            rows.clear();
+            rows.extend(offsets.iter().map(|&(dx, dy)| (e.padded(eat(j as i64 + dy as i64)), dx)));
+            let mut differs = false;
+            let words = &mut todo[j * mw..(j + 1) * mw];
+            for (m, mask) in words.iter_mut().enumerate() {
+                let mut bits = std::mem::take(mask);
+                while bits != 0 {
+                    let q = m * 64 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    if q >= nw {
+                        break;
+                    }
+                    let mut word = if q + 1 == nw { last_mask } else { !0 };
+                    if reach == 1 {
+                        for &(row, dx) in &rows {
+                            word &= near_shift(row, q, dx);
+                            if word == 0 {
+                                break;
+                            }
+                        }
+                    } else {
+                        for &(row, dx) in &rows {
+                            word &= shifted_word(&row[1..=nw], q, dx);
+                        }
+                    }
+                    differs |= word != cur[q];
+                    cur[q] = word;
+                }
+            }
+            if !differs {
                 space.row_group[k * h + j] = group;
                 continue;
             }
-            std::mem::swap(&mut cur, &mut new);
-            std::mem::swap(&mut cur_range, &mut new_range);
             let first = space.runs.len() as u32;
-            extract_runs(&cur, cur_range, &mut space.runs);
+            extract_runs(&cur, &mut space.runs);
             let last = space.runs.len() as u32;
             space.parent.extend(first..last);
             let previous = group;
-            group = if first == last { 0 } else { space.groups.push((first, last)); (space.groups.len() - 1) as u32 };
+            group = if first == last {
+                0
+            } else {
+                space.groups.push((first, last));
+                (space.groups.len() - 1) as u32
+            };
             space.row_group[k * h + j] = group;
             if previous != 0 && group != 0 {
                 space.join(previous, group, 1);
             }
         }
+        space.row_group[k * h + next_row..(k + 1) * h].fill(group);
     }
     // rotation in place: orientation k to k + 1 wherever either changes group
     for j in 0..h {
@@ -268,16 +345,35 @@ fn footprint_rows(e: &Pool, e_idx: &[u32], cover: &Cover, w: usize, h: usize) ->
     space
 }
 
-/// Appends the runs of set bits of `row` within words `range` (zero outside it).
-fn extract_runs(row: &[u64], range: (usize, usize), out: &mut Vec<(i32, i32)>) {
+/// Sets the neighbours of every set bit of the multi-word mask `m`.
+fn grow(m: &mut [u64]) {
+    let mut below = 0;
+    for q in 0..m.len() {
+        let x = m[q];
+        let above = if q + 1 < m.len() { m[q + 1] & 1 } else { 0 };
+        m[q] = x | (x << 1) | (x >> 1) | (below >> 63) | (above << 63);
+        below = x;
+    }
+}
+
+/// Word `q` of a zero-padded row (see [`Pool::padded`]) shifted by `d` cells, `|d| < 64`: as
+/// [`shifted_word`], without bounds to test.
+#[inline(always)]
+fn near_shift(padded: &[u64], q: usize, d: i32) -> u64 {
+    let (b, r) = ((q as i64 + 1 + d.div_euclid(64) as i64) as usize, d.rem_euclid(64) as u32);
+    (padded[b] >> r) | ((padded[b + 1] << 1) << (63 - r))
+}
+
+/// Appends the runs of set bits of `row`.
+fn extract_runs(row: &[u64], out: &mut Vec<(i32, i32)>) {
     let mut fill = out.len();
-    for k in range.0..range.1 {
+    for k in 0..row.len() {
         let x = row[k];
         if x == 0 {
             continue;
         }
-        let below = if k > range.0 { row[k - 1] >> 63 } else { 0 };
-        let above = if k + 1 < range.1 { row[k + 1] & 1 } else { 0 };
+        let below = if k > 0 { row[k - 1] >> 63 } else { 0 };
+        let above = if k + 1 < row.len() { row[k + 1] & 1 } else { 0 };
         let mut starts = x & !((x << 1) | below);
         let mut ends = x & !((x >> 1) | (above << 63));
         while starts != 0 {
