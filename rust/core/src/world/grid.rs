@@ -84,10 +84,12 @@ impl OccupancyGrid {
         let j0 = ((y0 / r - 0.5).ceil().max(0.0)) as usize;
         let i1 = ((x1 / r - 0.5).floor().min(self.width as Real - 1.0)) as i64;
         let j1 = ((y1 / r - 0.5).floor().min(self.height as Real - 1.0)) as i64;
-        for j in j0 as i64..=j1 {
-            for i in i0 as i64..=i1 {
-                self.set(i as usize, j as usize, c);
-            }
+        if i1 < i0 as i64 || j1 < j0 as i64 {
+            return;
+        }
+        let w = self.width;
+        for j in j0..=j1 as usize {
+            self.cells[j * w + i0..=j * w + i1 as usize].fill(c);
         }
     }
 
@@ -100,9 +102,13 @@ impl OccupancyGrid {
         }
         let i0 = (x0 / r - 0.5).ceil() as i64;
         let j0 = (y0 / r - 0.5).ceil() as i64;
-        let i1 = (x1 / r - 0.5).floor() as i64;
-        let j1 = (y1 / r - 0.5).floor() as i64;
-        (j0..=j1).all(|j| (i0..=i1).all(|i| self.get(i as usize, j as usize) == c))
+        let i1 = ((x1 / r - 0.5).floor() as i64).min(self.width as i64 - 1);
+        let j1 = ((y1 / r - 0.5).floor() as i64).min(self.height as i64 - 1);
+        if i1 < i0 || j1 < j0 {
+            return true;
+        }
+        let w = self.width;
+        (j0 as usize..=j1 as usize).all(|j| self.cells[j * w + i0 as usize..=j * w + i1 as usize].iter().fold(true, |acc, x| acc & (*x as u8 == c as u8)))
     }
 
     /// Row `j` of cells.
@@ -358,6 +364,27 @@ mod tests {
             for solid in [|c: Cell| c == Cell::Occupied, |c: Cell| c != Cell::Free] {
                 assert_eq!(g.wall_segments(2.0, solid), wall_segments_reference(&g, 2.0, solid), "case {case}");
             }
+        }
+    }
+
+    #[test]
+    fn fill_rect_and_rect_is_follow_cell_centres() {
+        let boxes = [(0.12, 0.31, 0.77, 0.52), (-1.0, -1.0, 0.1, 0.1), (0.4, 0.2, 9.0, 0.23), (0.3, 0.3, 0.31, 0.31), (0.6, 0.1, 0.2, 0.5)];
+        for (k, &(x0, y0, x1, y1)) in boxes.iter().enumerate() {
+            let mut g = OccupancyGrid::new(17, 12, 0.05, Pose2::default(), Cell::Free).unwrap();
+            g.fill_rect(x0, y0, x1, y1, Cell::Occupied);
+            let mut any = false;
+            for j in 0..12 {
+                for i in 0..17 {
+                    let (cx, cy) = ((i as Real + 0.5) * 0.05, (j as Real + 0.5) * 0.05);
+                    let want = cx >= x0 && cx <= x1 && cy >= y0 && cy <= y1;
+                    assert_eq!(g.get(i, j) == Cell::Occupied, want, "box {k} cell ({i}, {j})");
+                    any |= want;
+                }
+            }
+            let inside_grid = x0 >= 0.0 && y0 >= 0.0 && x1 <= 17.0 * 0.05 && y1 <= 12.0 * 0.05;
+            assert_eq!(g.rect_is(x0, y0, x1, y1, Cell::Occupied), inside_grid, "box {k}");
+            assert_eq!(g.rect_is(x0, y0, x1, y1, Cell::Free), inside_grid && !any, "box {k}");
         }
     }
 
