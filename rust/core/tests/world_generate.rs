@@ -190,7 +190,8 @@ fn check_paths(site: &GeneratedSite, margin: f64) {
 
 #[test]
 fn claimed_waypoints_have_collision_free_paths_with_the_margin() {
-    for (kind, seeds) in [(SiteKind::Office, 0..4), (SiteKind::Tunnel, 0..2)] {
+    // tunnel 101: the furniture near what it cuts off is not enough, the bisection decides
+    for (kind, seeds) in [(SiteKind::Office, vec![0, 1, 2, 3]), (SiteKind::Tunnel, vec![0, 1, 101])] {
         for seed in seeds {
             let cfg = GeneratorConfig { kind, ..Default::default() };
             let site = generate(seed, &cfg).unwrap();

@@ -8,10 +8,11 @@
 //!
 //! Every site is checked, not assumed, traversable: the footprint search of
 //! [`super::traverse`] must reach every waypoint (corridor ends, room centres, goal) from the
-//! start. A room the search cannot reach even without furniture is walled up again; then the
-//! fewest pieces of furniture that unblock every waypoint are removed, last placed first. The
-//! verdict always comes from a search of the grid as finally left, and the grid is exactly the
-//! map: walls are its cell edges and each furniture box is drawn as the cells it fills.
+//! start. A room the search cannot reach even without furniture is walled up again; the
+//! pieces of furniture next to what they cut off are removed (and, should that not be enough,
+//! the fewest pieces, last placed first). The verdict always comes from a search of the grid
+//! as finally left, and the grid is exactly the map: walls are its cell edges and each
+//! furniture box is drawn as the cells it fills (details in `generate/repair.rs`).
 //!
 //! ```
 //! use shieldnav_core::world::generate::{generate, GeneratorConfig};
@@ -27,9 +28,12 @@ use super::geometry::{Point2, Polygon, Pose2};
 use super::grid::{Cell, OccupancyGrid};
 use super::map::StaticMap;
 use super::scenario::Scenario;
-use super::traverse::{footprint_reachability, Footprint};
+use super::traverse::Footprint;
 use crate::error::{Error, Result};
 use crate::math::Real;
+
+pub(crate) mod repair;
+use repair::{repair, wall_up};
 
 /// How far in from a corridor's closed end its waypoint sits (m): the conservative disc
 /// cover of the footprint search needs about a metre in front of the robot's centre.
@@ -178,7 +182,8 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         furniture.push((snapped, height, cells));
     }
     let (open_rooms, kept) = repair(&mut grid, cfg, seed, start, &waypoints, &rooms, &furniture)?;
-    furniture.truncate(kept);
+    let mut keep = kept.iter();
+    furniture.retain(|_| *keep.next().unwrap());
     let mut walls_grid = walls_grid;
     for (r, open) in rooms.iter().zip(&open_rooms) {
         if !open {
@@ -199,72 +204,6 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     let mut scenario = Scenario::new(format!("procedural_{kind}_{seed}"), map, start);
     scenario.goal = Some(goal);
     Ok(GeneratedSite { scenario, waypoints, grid })
-}
-
-/// Fills a room and its doorway back in.
-fn wall_up(grid: &mut OccupancyGrid, r: &Room) {
-    grid.fill_rect(r.rect[0], r.rect[1], r.rect[2], r.rect[3], Cell::Occupied);
-    grid.fill_rect(r.door[0], r.door[1], r.door[2], r.door[3], Cell::Occupied);
-}
-
-/// Sets `grid` to hold the first `kept` pieces of `furniture` (the rest removed) with the
-/// closed rooms walled up.
-fn furnish(grid: &mut OccupancyGrid, furniture: &[Furniture], kept: usize, rooms: &[Room], open: &[bool]) {
-    for (k, (_, _, cells)) in furniture.iter().enumerate() {
-        let c = if k < kept { Cell::Occupied } else { Cell::Free };
-        for &(i, j) in cells {
-            grid.set(i, j, c);
-        }
-    }
-    for (r, _) in rooms.iter().zip(open).filter(|(_, o)| !**o) {
-        wall_up(grid, r);
-    }
-}
-
-/// Checks the site and repairs it until the footprint search reaches every corridor waypoint
-/// and every open room from the start: rooms it cannot reach even without furniture are
-/// walled up, then the fewest pieces of furniture are removed, last placed first (found by
-/// bisection: reachability only grows as pieces go). Every verdict comes from a search of the
-/// grid as it is finally left. Returns which rooms stay open and how many pieces stay.
-fn repair(grid: &mut OccupancyGrid, cfg: &GeneratorConfig, seed: u64, start: Pose2, waypoints: &[Point2], rooms: &[Room], furniture: &[Furniture]) -> Result<(Vec<bool>, usize)> {
-    let n = furniture.len();
-    let search = |grid: &OccupancyGrid| footprint_reachability(grid, cfg.footprint, cfg.margin, start);
-    let ok = |grid: &mut OccupancyGrid, kept: usize, open: &[bool]| -> Result<bool> {
-        furnish(grid, furniture, kept, rooms, open);
-        let reach = search(grid)?;
-        Ok(waypoints.iter().all(|p| reach.reaches(*p)) && rooms.iter().zip(open).all(|(r, o)| !o || reach.reaches(r.centre)))
-    };
-    let mut open = vec![true; rooms.len()];
-    if ok(grid, n, &open)? {
-        return Ok((open, n));
-    }
-    // without furniture: a room still out of reach is closed; the corridors must be reachable
-    furnish(grid, furniture, 0, rooms, &open);
-    let bare = search(grid)?;
-    if !waypoints.iter().all(|p| bare.reaches(*p)) {
-        return Err(Error::invalid("seed", format!("site {seed}: a corridor waypoint is unreachable even without furniture")));
-    }
-    for (o, r) in open.iter_mut().zip(rooms) {
-        *o = bare.reaches(r.centre);
-    }
-    if open.iter().any(|o| !o) && ok(grid, n, &open)? {
-        return Ok((open, n));
-    }
-    // keeping `n` pieces fails; every count below `lo` passes, every count from `hi` fails
-    let (mut lo, mut hi) = (0, n);
-    while lo < hi {
-        let mid = lo + (hi - lo) / 2;
-        if ok(grid, mid, &open)? {
-            lo = mid + 1;
-        } else {
-            hi = mid;
-        }
-    }
-    if lo == 0 {
-        return Err(Error::invalid("seed", format!("site {seed}: walling up the unreachable rooms cut off a waypoint")));
-    }
-    furnish(grid, furniture, lo - 1, rooms, &open);
-    Ok((open, lo - 1))
 }
 
 fn cells_in(grid: &OccupancyGrid, r: [Real; 4]) -> Vec<(usize, usize)> {

@@ -22,7 +22,8 @@
 //! free configurations is a collision-free motion with the margin kept throughout.
 //!
 //! The search itself is exact for these rules (it reaches what a breadth-first search over
-//! single configurations reaches) but runs on whole rows: see [`super::cspace`].
+//! single configurations reaches) but runs on whole rows (see `cspace.rs`): 0.2–0.3 ms on a
+//! 1280 × 880 site grid where the search over single configurations took 60–200 ms.
 
 use super::cspace::{self, Cover, Space, ORIENTATIONS};
 use super::geometry::{Point2, Pose2};
@@ -91,7 +92,10 @@ pub struct Reachability {
     width: usize,
     height: usize,
     space: Space,
-    reached: Vec<bool>,
+    /// The component (root run) of each run of free configurations.
+    component: Vec<u32>,
+    /// The start's component.
+    start: u32,
 }
 
 impl Reachability {
@@ -102,31 +106,66 @@ impl Reachability {
         if fi < 0.0 || fj < 0.0 || fi >= self.width as Real || fj >= self.height as Real {
             return false;
         }
-        (0..ORIENTATIONS).any(|k| self.space.run_at(k, fj as usize, fi as i32).is_some_and(|r| self.reached[r]))
+        (0..ORIENTATIONS).any(|k| self.space.run_at(k, fj as usize, fi as i32).is_some_and(|r| self.component[r] == self.start))
+    }
+
+    /// The components of the free configurations whose centre is in the cell of `p` (reached
+    /// or not), appended to `out`.
+    pub(crate) fn components_at(&self, p: Point2, out: &mut Vec<u32>) {
+        let q = self.grid_origin.inverse_transform_point(p);
+        let (fi, fj) = ((q[0] / self.resolution).floor(), (q[1] / self.resolution).floor());
+        if fi < 0.0 || fj < 0.0 || fi >= self.width as Real || fj >= self.height as Real {
+            return;
+        }
+        out.extend((0..ORIENTATIONS).filter_map(|k| self.space.run_at(k, fj as usize, fi as i32)).map(|r| self.component[r]));
+    }
+
+    /// Whether a free configuration of one of the `components` has its centre in the grid box
+    /// `[i0, i1] × [j0, j1]` (cells).
+    pub(crate) fn components_in_box(&self, components: &[u32], (i0, j0, i1, j1): (i32, i32, i32, i32)) -> bool {
+        (j0.max(0)..=j1.min(self.height as i32 - 1)).any(|j| {
+            (0..ORIENTATIONS).any(|k| {
+                let (a, _) = self.space.groups[self.space.row_group[k * self.height + j as usize] as usize];
+                let runs = self.space.row_runs(k, j as usize).iter().enumerate();
+                runs.filter(|(_, run)| run.0 <= i1 && run.1 >= i0).any(|(r, _)| components.contains(&self.component[a as usize + r]))
+            })
+        })
     }
 
     /// Number of reached cells.
     pub fn count(&self) -> usize {
-        let mut row: Vec<(i32, i32)> = Vec::new();
-        let mut total = 0;
-        for j in 0..self.height {
-            row.clear();
-            for k in 0..ORIENTATIONS {
-                let (a, _) = self.space.groups[self.space.row_group[k * self.height + j] as usize];
-                let runs = self.space.row_runs(k, j).iter().enumerate();
-                row.extend(runs.filter(|(r, _)| self.reached[a as usize + r]).map(|(_, run)| *run));
-            }
-            row.sort_unstable();
-            let mut end = i32::MIN;
-            for &(a, b) in &row {
-                let a = a.max(end + 1);
-                if b >= a {
-                    total += (b - a + 1) as usize;
-                    end = b;
-                }
+        let mut row = Vec::new();
+        (0..self.height)
+            .map(|j| {
+                self.reached_row(j, &mut row);
+                row.iter().map(|(a, b)| (b - a + 1) as usize).sum::<usize>()
+            })
+            .sum()
+    }
+
+    /// The reached cells of row `j` as disjoint runs `(first, last)` in increasing order.
+    pub(crate) fn reached_row(&self, j: usize, out: &mut Vec<(i32, i32)>) {
+        out.clear();
+        if j >= self.height {
+            return;
+        }
+        for k in 0..ORIENTATIONS {
+            let (a, _) = self.space.groups[self.space.row_group[k * self.height + j] as usize];
+            let runs = self.space.row_runs(k, j).iter().enumerate();
+            out.extend(runs.filter(|(r, _)| self.component[a as usize + r] == self.start).map(|(_, run)| *run));
+        }
+        out.sort_unstable();
+        let mut merged = 0;
+        for r in 0..out.len() {
+            let (a, b) = out[r];
+            if merged > 0 && a <= out[merged - 1].1 + 1 {
+                out[merged - 1].1 = out[merged - 1].1.max(b);
+            } else {
+                out[merged] = (a, b);
+                merged += 1;
             }
         }
-        total
+        out.truncate(merged);
     }
 }
 
@@ -149,9 +188,9 @@ pub fn footprint_reachability(grid: &OccupancyGrid, footprint: Footprint, margin
     let Some(first) = first else {
         return Err(Error::invalid("start", format!("the footprint with margin {margin} m does not fit at {start:?}")));
     };
-    let root = space.find(first);
-    let reached = (0..space.runs.len()).map(|r| space.find(r) == root).collect();
-    Ok(Reachability { grid_origin: grid.origin, resolution: grid.resolution, width: grid.width, height: grid.height, space, reached })
+    let start = space.find(first) as u32;
+    let component = (0..space.runs.len()).map(|r| space.find(r) as u32).collect();
+    Ok(Reachability { grid_origin: grid.origin, resolution: grid.resolution, width: grid.width, height: grid.height, space, component, start })
 }
 
 #[cfg(test)]
