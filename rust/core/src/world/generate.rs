@@ -147,8 +147,6 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         let far = if c.horizontal() { [if c.x0 < main.x0 { c.x0 + END_INSET } else { c.x1 - END_INSET }, 0.5 * (c.y0 + c.y1)] } else if c.y0 < yc { [0.5 * (c.x0 + c.x1), c.y0 + END_INSET] } else { [0.5 * (c.x0 + c.x1), c.y1 - END_INSET] };
         waypoints.push(far);
     }
-    // walls come from the grid before furniture; furniture is separate polygons
-    let walls_grid = grid.clone();
     let mut furniture: Vec<Furniture> = Vec::new();
     let corridor_count = corridors.len();
     for _ in 0..cfg.furniture {
@@ -184,16 +182,20 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     let (open_rooms, kept) = repair(&mut grid, cfg, seed, start, &waypoints, &rooms, &furniture)?;
     let mut keep = kept.iter();
     furniture.retain(|_| *keep.next().unwrap());
-    let mut walls_grid = walls_grid;
     for (r, open) in rooms.iter().zip(&open_rooms) {
-        if !open {
-            wall_up(&mut walls_grid, r);
-        } else {
+        if *open {
             waypoints.push(r.centre);
         }
     }
+    // walls come from the grid without furniture (the rooms closed again filled back in);
+    // furniture is separate polygons
+    set_cells(&mut grid, &furniture, Cell::Free);
+    for (r, _) in rooms.iter().zip(&open_rooms).filter(|(_, o)| !**o) {
+        wall_up(&mut grid, r);
+    }
     let mut map = StaticMap::new();
-    map.segments = walls_grid.wall_segments(cfg.wall_height, |c| c == Cell::Occupied);
+    map.segments = grid.wall_segments(cfg.wall_height, |c| c == Cell::Occupied);
+    set_cells(&mut grid, &furniture, Cell::Occupied);
     for (rect, height, _) in &furniture {
         map.add_polygon(Polygon::rect(rect[0], rect[1], rect[2], rect[3], *height))?;
     }
@@ -204,6 +206,15 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     let mut scenario = Scenario::new(format!("procedural_{kind}_{seed}"), map, start);
     scenario.goal = Some(goal);
     Ok(GeneratedSite { scenario, waypoints, grid })
+}
+
+/// Sets the cells of every piece of `furniture` to `c`.
+fn set_cells(grid: &mut OccupancyGrid, furniture: &[Furniture], c: Cell) {
+    for (_, _, cells) in furniture {
+        for &(i, j) in cells {
+            grid.set(i, j, c);
+        }
+    }
 }
 
 fn cells_in(grid: &OccupancyGrid, r: [Real; 4]) -> Vec<(usize, usize)> {
