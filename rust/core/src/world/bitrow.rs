@@ -18,22 +18,33 @@ pub(crate) fn cell_bytes(c: &[Cell]) -> u64 {
     u64::from_le_bytes(std::array::from_fn(|i| c[i] as u8))
 }
 
-/// Packs the free cells of `row` into `out` (1 = [`Cell::Free`]).
-pub(crate) fn pack_free(row: &[Cell], out: &mut [u64]) {
+/// Packs the cells of `row` whose value is selected into `out`: cell `c` gives 1 iff
+/// `select[c as usize]`.
+pub(crate) fn pack_cells(row: &[Cell], select: [bool; 3], out: &mut [u64]) {
     const LOW: u64 = 0x0101_0101_0101_0101;
+    const HIGH: u64 = 0x8080_8080_8080_8080;
     for (k, w) in out.iter_mut().enumerate() {
         let chunk = &row[k * 64..row.len().min((k + 1) * 64)];
         *w = if chunk.len() == 64 {
             chunk.chunks_exact(8).enumerate().fold(0, |m, (b, c)| {
-                // a byte's low bit: set iff the cell (0, 1 or 2) is not free; flipped, gathered
+                // the high bit of each byte equal to a selected value, gathered into 8 bits
                 let x = cell_bytes(c);
-                let free = ((x | (x >> 1)) & LOW) ^ LOW;
-                m | (free.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * b)
+                let mut hit = 0;
+                for (v, _) in select.iter().enumerate().filter(|(_, s)| **s) {
+                    let y = x ^ (v as u64 * LOW);
+                    hit |= !(((y & !HIGH) + !HIGH) | y) & HIGH;
+                }
+                m | ((hit >> 7).wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * b)
             })
         } else {
-            chunk.iter().enumerate().fold(0, |m, (b, c)| m | ((*c == Cell::Free) as u64) << b)
+            chunk.iter().enumerate().fold(0, |m, (b, c)| m | (select[*c as usize] as u64) << b)
         };
     }
+}
+
+/// Packs the free cells of `row` into `out` (1 = [`Cell::Free`]).
+pub(crate) fn pack_free(row: &[Cell], out: &mut [u64]) {
+    pack_cells(row, [true, false, false], out);
 }
 
 /// Word `k` of `src` shifted by `d` cells: bit `i` of the result is cell `i + d` of `src`
@@ -82,6 +93,30 @@ pub(crate) fn erode(src: &[u64], w: usize, out: &mut [u64], tmp: &mut [u64]) {
     }
 }
 
+/// Appends the runs of set bits of `row`.
+pub(crate) fn extract_runs(row: &[u64], out: &mut Vec<(i32, i32)>) {
+    let mut fill = out.len();
+    for k in 0..row.len() {
+        let x = row[k];
+        if x == 0 {
+            continue;
+        }
+        let below = if k > 0 { row[k - 1] >> 63 } else { 0 };
+        let above = if k + 1 < row.len() { row[k + 1] & 1 } else { 0 };
+        let mut starts = x & !((x << 1) | below);
+        let mut ends = x & !((x >> 1) | (above << 63));
+        while starts != 0 {
+            out.push(((k * 64) as i32 + starts.trailing_zeros() as i32, -1));
+            starts &= starts - 1;
+        }
+        while ends != 0 {
+            out[fill].1 = (k * 64) as i32 + ends.trailing_zeros() as i32;
+            fill += 1;
+            ends &= ends - 1;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -95,7 +130,11 @@ mod tests {
         (0..n)
             .map(|_| {
                 s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                if (s >> 33) % 7 == 0 { Cell::Occupied } else { Cell::Free }
+                match (s >> 33) % 9 {
+                    0 => Cell::Occupied,
+                    1 => Cell::Unknown,
+                    _ => Cell::Free,
+                }
             })
             .collect()
     }
@@ -110,6 +149,25 @@ mod tests {
             for i in 0..row.len() as i64 * 64 {
                 assert_eq!(bit(&row, i), free(i), "pack {n} {i}");
             }
+            for select in [[false, true, false], [false, true, true], [true, true, true], [false, false, true]] {
+                let mut sel = vec![0; row.len()];
+                pack_cells(&cells, select, &mut sel);
+                for i in 0..row.len() as i64 * 64 {
+                    assert_eq!(bit(&sel, i), i < n as i64 && select[cells[i as usize] as usize], "pack {select:?} {n} {i}");
+                }
+            }
+            let mut runs = Vec::new();
+            extract_runs(&row, &mut runs);
+            let mut want = Vec::new();
+            for i in 0..n as i64 {
+                if free(i) && !free(i - 1) {
+                    want.push((i as i32, -1));
+                }
+                if free(i) && !free(i + 1) {
+                    want.last_mut().unwrap().1 = i as i32;
+                }
+            }
+            assert_eq!(runs, want, "runs {n}");
             for d in [-130, -64, -63, -17, -1, 0, 1, 5, 63, 64, 100] {
                 let s: Vec<u64> = (0..row.len()).map(|k| shifted_word(&row, k, d)).collect();
                 for i in 0..row.len() as i64 * 64 {

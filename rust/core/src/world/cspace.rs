@@ -17,7 +17,7 @@
 //! share their runs. On a site of long straight walls this leaves a few hundred rows to work
 //! on out of thousands.
 
-use super::bitrow::{erode, pack_free, shifted_word, words_for};
+use super::bitrow::{erode, extract_runs, pack_free, shifted_word, words_for};
 use super::grid::{rows_equal, OccupancyGrid};
 use crate::math::Real;
 
@@ -362,28 +362,4 @@ fn grow(m: &mut [u64]) {
 fn near_shift(padded: &[u64], q: usize, d: i32) -> u64 {
     let (b, r) = ((q as i64 + 1 + d.div_euclid(64) as i64) as usize, d.rem_euclid(64) as u32);
     (padded[b] >> r) | ((padded[b + 1] << 1) << (63 - r))
-}
-
-/// Appends the runs of set bits of `row`.
-fn extract_runs(row: &[u64], out: &mut Vec<(i32, i32)>) {
-    let mut fill = out.len();
-    for k in 0..row.len() {
-        let x = row[k];
-        if x == 0 {
-            continue;
-        }
-        let below = if k > 0 { row[k - 1] >> 63 } else { 0 };
-        let above = if k + 1 < row.len() { row[k + 1] & 1 } else { 0 };
-        let mut starts = x & !((x << 1) | below);
-        let mut ends = x & !((x >> 1) | (above << 63));
-        while starts != 0 {
-            out.push(((k * 64) as i32 + starts.trailing_zeros() as i32, -1));
-            starts &= starts - 1;
-        }
-        while ends != 0 {
-            out[fill].1 = (k * 64) as i32 + ends.trailing_zeros() as i32;
-            fill += 1;
-            ends &= ends - 1;
-        }
-    }
 }

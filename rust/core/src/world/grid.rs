@@ -3,6 +3,7 @@
 //! Cell `(i, j)` is column `i` (along the grid's x) and row `j` counted from the *bottom*
 //! (along its y); its lower-left corner is `origin ∘ (i·res, j·res)`.
 
+use super::bitrow::{extract_runs, pack_cells, words_for};
 use super::geometry::{Point2, Pose2, Segment};
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -123,65 +124,79 @@ impl OccupancyGrid {
     /// with the solid on the same side merged into one straight run. Horizontal walls come
     /// first, by row then column; then vertical walls, by column then row.
     ///
-    /// Only rows that differ from the row below are scanned, so a grid of long straight walls
-    /// costs little more than one pass comparing rows.
+    /// Rows are packed 64 cells to a word and only rows that differ from the row below are
+    /// looked at, so a grid of long straight walls costs little more than comparing its rows.
     pub fn wall_segments(&self, height: Real, solid: impl Fn(Cell) -> bool) -> Vec<Segment> {
         let (w, h) = (self.width, self.height);
         let r = self.resolution;
+        let select = [solid(Cell::Free), solid(Cell::Occupied), solid(Cell::Unknown)];
         let mut out = Vec::new();
         let emit = |out: &mut Vec<Segment>, p: Point2, q: Point2, solid_left_when_forward: bool| {
             let (p, q) = (self.grid_to_world(p), self.grid_to_world(q));
             out.push(if solid_left_when_forward { Segment::one_sided(p, q, height) } else { Segment::one_sided(q, p, height) });
         };
-        // solid flags of the rows below and above grid line y = j (off the grid: not solid)
-        let (mut below, mut above) = (vec![false; w], vec![false; w]);
-        // per vertical grid line x = i, the open run of edges: (first row, solid on the left)
-        let mut open: Vec<Option<(usize, bool)>> = vec![None; w + 1];
+        // solid bits of the rows below and above grid line y = j (off the grid: not solid)
+        let (nw, lw) = (words_for(w), words_for(w + 1));
+        let (mut below, mut above) = (vec![0u64; nw], vec![0u64; nw]);
+        // per vertical grid line x = i (bit i): an open run of edges, its side, its first row
+        let (mut open, mut open_left) = (vec![0u64; lw], vec![0u64; lw]);
+        let mut open_from = vec![0usize; w + 1];
+        let (mut edge, mut left) = (vec![0u64; lw], vec![0u64; lw]);
         let mut vertical: Vec<(usize, usize, usize, bool)> = Vec::new();
+        let (mut up, mut down, mut runs) = (vec![0u64; nw], vec![0u64; nw], Vec::new());
         for j in 0..=h {
             if j > 0 && j < h && rows_equal(self.row(j), self.row(j - 1)) {
                 continue; // no horizontal edge on this line, the vertical runs go on
             }
             if j < h {
-                for (a, c) in above.iter_mut().zip(self.row(j)) {
-                    *a = solid(*c);
-                }
+                pack_cells(self.row(j), select, &mut above);
             } else {
-                above.fill(false);
+                above.fill(0);
             }
-            // horizontal edges on grid line y = j; side: solid above?
-            let mut run: Option<(usize, bool)> = None;
-            for i in 0..=w {
-                let edge = (i < w && below[i] != above[i]).then(|| above[i]);
-                if let Some((i0, up)) = run {
-                    if edge != Some(up) {
-                        // +x has +y on its left: forward when the solid is above
-                        emit(&mut out, [i0 as Real * r, j as Real * r], [i as Real * r, j as Real * r], up);
-                        run = None;
-                    }
-                }
-                if run.is_none() {
-                    run = edge.map(|s| (i, s));
-                }
+            // horizontal edges on grid line y = j, in runs of one side, from left to right;
+            // +x has +y on its left: forward when the solid is above
+            for q in 0..nw {
+                up[q] = above[q] & !below[q];
+                down[q] = below[q] & !above[q];
             }
-            // vertical edges of row j on grid lines x = i; side: solid at -x?
-            for (i, slot) in open.iter_mut().enumerate() {
-                let (left, right) = (i > 0 && above[i - 1], i < w && above[i]);
-                let edge = (j < h && left != right).then_some(left);
-                match *slot {
-                    Some((_, side)) if edge == Some(side) => {}
-                    Some((j0, side)) => {
-                        vertical.push((i, j0, j, side));
-                        *slot = edge.map(|s| (j, s));
-                    }
-                    None => *slot = edge.map(|s| (j, s)),
+            runs.clear();
+            extract_runs(&up, &mut runs);
+            let n_up = runs.len();
+            extract_runs(&down, &mut runs);
+            let (ups, downs) = runs.split_at(n_up);
+            let (mut a, mut b) = (0, 0);
+            while a < ups.len() || b < downs.len() {
+                let take_up = b == downs.len() || (a < ups.len() && ups[a].0 < downs[b].0);
+                let (run, is_up) = if take_up { (ups[a], true) } else { (downs[b], false) };
+                if take_up { a += 1 } else { b += 1 }
+                emit(&mut out, [run.0 as Real * r, j as Real * r], [(run.1 + 1) as Real * r, j as Real * r], is_up);
+            }
+            // vertical edges of row j on grid lines x = i: solid on exactly one side, side =
+            // solid at -x; +y has -x on its left: forward when the solid is at -x
+            for q in 0..lw {
+                let cur = if q < nw { above[q] } else { 0 };
+                left[q] = (cur << 1) | if q > 0 { above[q - 1] >> 63 } else { 0 };
+                edge[q] = cur ^ left[q];
+            }
+            for q in 0..lw {
+                let going = open[q] & edge[q] & !(open_left[q] ^ left[q]);
+                let (mut close, mut start) = (open[q] & !going, edge[q] & !going);
+                while close != 0 {
+                    let i = q * 64 + close.trailing_zeros() as usize;
+                    vertical.push((i, open_from[i], j, open_left[q] >> (i % 64) & 1 == 1));
+                    close &= close - 1;
                 }
+                while start != 0 {
+                    open_from[q * 64 + start.trailing_zeros() as usize] = j;
+                    start &= start - 1;
+                }
+                open[q] = edge[q];
+                open_left[q] = left[q] & edge[q];
             }
             std::mem::swap(&mut below, &mut above);
         }
         vertical.sort_unstable_by_key(|v| (v.0, v.1));
         for (i, j0, j1, left) in vertical {
-            // +y has -x on its left: forward when the solid is at -x
             emit(&mut out, [i as Real * r, j0 as Real * r], [i as Real * r, j1 as Real * r], left);
         }
         out
@@ -346,7 +361,7 @@ mod tests {
             (s >> 33) as usize % n
         };
         for case in 0..40 {
-            let (w, h) = (1 + next(70), 1 + next(50));
+            let (w, h) = (1 + next(200), 1 + next(50));
             let mut g = OccupancyGrid::new(w, h, 0.05, Pose2::new(1.0, -2.0, 0.3 * case as Real), Cell::Free).unwrap();
             for _ in 0..next(12) {
                 let (x0, y0) = (next(w), next(h));
