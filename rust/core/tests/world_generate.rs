@@ -190,8 +190,9 @@ fn check_paths(site: &GeneratedSite, margin: f64) {
 
 #[test]
 fn claimed_waypoints_have_collision_free_paths_with_the_margin() {
+    // office 728: walling up a room out of reach cuts off another, walled up in turn;
     // tunnel 101: the furniture near what it cuts off is not enough, the bisection decides
-    for (kind, seeds) in [(SiteKind::Office, vec![0, 1, 2, 3]), (SiteKind::Tunnel, vec![0, 1, 101])] {
+    for (kind, seeds) in [(SiteKind::Office, vec![0, 1, 2, 3, 728]), (SiteKind::Tunnel, vec![0, 1, 101])] {
         for seed in seeds {
             let cfg = GeneratorConfig { kind, ..Default::default() };
             let site = generate(seed, &cfg).unwrap();

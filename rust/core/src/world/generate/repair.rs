@@ -1,8 +1,8 @@
 //! Checking a generated site and repairing it until every waypoint is reached.
 //!
 //! One footprint search of the furnished site usually settles it. If something is out of
-//! reach, a search without furniture tells the rooms out of reach even then (walled up again)
-//! from what the furniture cut off. The pieces near what was cut off are removed and the site
+//! reach, a search without furniture tells the rooms out of reach even then (walled up again,
+//! until closing rooms cuts off no other) from what the furniture cut off. The pieces near what was cut off are removed and the site
 //! searched again; if that is not enough, the most furniture kept in placement order that
 //! leaves everything reachable is found by bisection (reachability only grows as pieces go).
 //! Every verdict comes from a search of the grid as it is finally left.
@@ -51,16 +51,28 @@ pub(super) fn repair(grid: &mut OccupancyGrid, cfg: &GeneratorConfig, seed: u64,
     if fine {
         return Ok((open, all));
     }
-    // without furniture: a room still out of reach is closed; the corridors must be reachable
-    let (_, bare) = check(grid, &vec![false; n], &open)?;
-    if !waypoints.iter().all(|p| bare.reaches(*p)) {
-        return Err(Error::invalid("seed", format!("site {seed}: a corridor waypoint is unreachable even without furniture")));
-    }
-    for (o, r) in open.iter_mut().zip(rooms) {
-        *o = bare.reaches(r.centre);
-    }
-    if open.iter().any(|o| !o) && check(grid, &all, &open)?.0 {
-        return Ok((open, all));
+    // without furniture: a room still out of reach is closed (and closing one can narrow the
+    // way to another, so again); the corridors must be reachable
+    let none = vec![false; n];
+    let mut bare = check(grid, &none, &open)?.1;
+    loop {
+        if !waypoints.iter().all(|p| bare.reaches(*p)) {
+            return Err(Error::invalid("seed", format!("site {seed}: a corridor waypoint is unreachable even without furniture")));
+        }
+        let mut closed = false;
+        for (o, r) in open.iter_mut().zip(rooms) {
+            if *o && !bare.reaches(r.centre) {
+                *o = false;
+                closed = true;
+            }
+        }
+        if !closed {
+            break; // `bare` reaches everything: keeping no furniture passes
+        }
+        if check(grid, &all, &open)?.0 {
+            return Ok((open, all));
+        }
+        bare = check(grid, &none, &open)?.1;
     }
     // what the furniture cut off: the places reached without it, not with it, and the
     // configurations joined to them with it. A piece that cuts them off blocks a footprint
@@ -88,9 +100,10 @@ pub(super) fn repair(grid: &mut OccupancyGrid, cfg: &GeneratorConfig, seed: u64,
     if keep.iter().any(|k| !k) && check(grid, &keep, &open)?.0 {
         return Ok((open, keep));
     }
-    // keeping all `n` fails; every count below `lo` passes, every count from `hi` fails
+    // keeping all `n` pieces fails, none passes: every count below `lo` passes, every count
+    // from `hi` fails
     let prefix = |kept: usize| -> Vec<bool> { (0..n).map(|k| k < kept).collect() };
-    let (mut lo, mut hi) = (0, n);
+    let (mut lo, mut hi) = (1, n);
     while lo < hi {
         let mid = lo + (hi - lo) / 2;
         if check(grid, &prefix(mid), &open)?.0 {
@@ -98,9 +111,6 @@ pub(super) fn repair(grid: &mut OccupancyGrid, cfg: &GeneratorConfig, seed: u64,
         } else {
             hi = mid;
         }
-    }
-    if lo == 0 {
-        return Err(Error::invalid("seed", format!("site {seed}: walling up the unreachable rooms cut off a waypoint")));
     }
     furnish(grid, furniture, &prefix(lo - 1), rooms, &open);
     Ok((open, prefix(lo - 1)))
