@@ -152,8 +152,11 @@ fn clearance(map: &StaticMap, pose: Pose2, fp: Footprint, reach: f64) -> f64 {
     best
 }
 
-/// The pose of configuration `(i, j, k)` of the site's grid (16 headings).
-fn pose_of(site: &GeneratedSite, (i, j, k): (usize, usize, usize)) -> Pose2 {
+/// A configuration of the search: cell `(i, j)`, heading `k` of 16.
+type Config = (usize, usize, usize);
+
+/// The pose of configuration `(i, j, k)` of the site's grid.
+fn pose_of(site: &GeneratedSite, (i, j, k): Config) -> Pose2 {
     let c = site.grid.cell_center(i, j);
     Pose2::new(c[0], c[1], site.grid.origin.yaw + k as f64 * std::f64::consts::TAU / HEADINGS as f64)
 }
@@ -165,7 +168,7 @@ fn pose_of(site: &GeneratedSite, (i, j, k): (usize, usize, usize)) -> Pose2 {
 fn check_paths(site: &GeneratedSite, margin: f64) {
     let fp = Footprint::default();
     let reach = reference_search(&site.grid, fp, margin, site.scenario.start).expect("the start fits");
-    let mut moves: HashSet<((usize, usize, usize), (usize, usize, usize))> = HashSet::new();
+    let mut moves: HashSet<(Config, Config)> = HashSet::new();
     for p in &site.waypoints {
         let (i, j) = site.grid.world_to_cell(*p).unwrap();
         let path = reach.path_to(i, j).unwrap_or_else(|| panic!("{}: waypoint {p:?} not reached by the brute-force search", site.scenario.name));

@@ -88,8 +88,8 @@ pub(crate) fn erode(src: &[u64], w: usize, out: &mut [u64], tmp: &mut [u64]) {
         and_shifted(out, tmp, (span - p) as i32, 0..src.len());
     }
     tmp.copy_from_slice(out);
-    for k in 0..src.len() {
-        out[k] = shifted_word(tmp, k, -(w as i32));
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = shifted_word(tmp, k, -(w as i32));
     }
 }
 
