@@ -7,9 +7,12 @@
 //! grid; walls are its merged cell edges, furniture boxes are polygons of their own height.
 //!
 //! Every site is checked, not assumed, traversable: the footprint search of
-//! [`super::traverse`] must reach every waypoint (corridor ends, junctions, room centres) from
-//! the start. Furniture that blocks a waypoint is removed (last placed first); a room still
-//! unreachable is walled up again.
+//! [`super::traverse`] must reach every waypoint (corridor ends, room centres, goal) from the
+//! start. A room the search cannot reach even without furniture is walled up again; the
+//! pieces of furniture next to what they cut off are removed (and, should that not be enough,
+//! the fewest pieces, last placed first). The verdict always comes from a search of the grid
+//! as finally left, and the grid is exactly the map: walls are its cell edges and each
+//! furniture box is drawn as the cells it fills (details in `generate/repair.rs`).
 //!
 //! ```
 //! use shieldnav_core::world::generate::{generate, GeneratorConfig};
@@ -25,9 +28,12 @@ use super::geometry::{Point2, Polygon, Pose2};
 use super::grid::{Cell, OccupancyGrid};
 use super::map::StaticMap;
 use super::scenario::Scenario;
-use super::traverse::{footprint_reachability, Footprint};
+use super::traverse::Footprint;
 use crate::error::{Error, Result};
 use crate::math::Real;
+
+pub(crate) mod repair;
+use repair::{repair, wall_up};
 
 /// How far in from a corridor's closed end its waypoint sits (m): the conservative disc
 /// cover of the footprint search needs about a metre in front of the robot's centre.
@@ -141,8 +147,6 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         let far = if c.horizontal() { [if c.x0 < main.x0 { c.x0 + END_INSET } else { c.x1 - END_INSET }, 0.5 * (c.y0 + c.y1)] } else if c.y0 < yc { [0.5 * (c.x0 + c.x1), c.y0 + END_INSET] } else { [0.5 * (c.x0 + c.x1), c.y1 - END_INSET] };
         waypoints.push(far);
     }
-    // walls come from the grid before furniture; furniture is separate polygons
-    let walls_grid = grid.clone();
     let mut furniture: Vec<Furniture> = Vec::new();
     let corridor_count = corridors.len();
     for _ in 0..cfg.furniture {
@@ -171,46 +175,27 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         for &(i, j) in &cells {
             grid.set(i, j, Cell::Occupied);
         }
-        furniture.push((rect, height, cells));
+        // the box as drawn is exactly the cells it fills, so the grid searched is the map
+        let snapped = [cells[0].0 as Real * res, cells[0].1 as Real * res, (cells[cells.len() - 1].0 + 1) as Real * res, (cells[cells.len() - 1].1 + 1) as Real * res];
+        furniture.push((snapped, height, cells));
     }
-    let room_points: Vec<Point2> = rooms.iter().map(|r| r.centre).collect();
-    // check, then repair: furniture out (last first), then unreachable rooms walled up
-    let mut open_rooms: Vec<bool> = vec![true; rooms.len()];
-    loop {
-        let reach = footprint_reachability(&grid, cfg.footprint, cfg.margin, start)?;
-        let corridor_ok = waypoints.iter().all(|p| reach.reaches(*p));
-        let rooms_ok = room_points.iter().zip(&open_rooms).all(|(p, open)| !open || reach.reaches(*p));
-        if corridor_ok && rooms_ok {
-            break;
-        }
-        if let Some((_, _, cells)) = furniture.pop() {
-            for (i, j) in cells {
-                grid.set(i, j, Cell::Free);
-            }
-            continue;
-        }
-        if !corridor_ok {
-            return Err(Error::invalid("seed", format!("site {seed}: a corridor waypoint is unreachable even without furniture")));
-        }
-        for (k, r) in rooms.iter().enumerate() {
-            if open_rooms[k] && !reach.reaches(r.centre) {
-                open_rooms[k] = false;
-                grid.fill_rect(r.rect[0], r.rect[1], r.rect[2], r.rect[3], Cell::Occupied);
-                grid.fill_rect(r.door[0], r.door[1], r.door[2], r.door[3], Cell::Occupied);
-            }
-        }
-    }
-    let mut walls_grid = walls_grid;
-    for (k, r) in rooms.iter().enumerate() {
-        if !open_rooms[k] {
-            walls_grid.fill_rect(r.rect[0], r.rect[1], r.rect[2], r.rect[3], Cell::Occupied);
-            walls_grid.fill_rect(r.door[0], r.door[1], r.door[2], r.door[3], Cell::Occupied);
-        } else {
+    let (open_rooms, kept) = repair(&mut grid, cfg, seed, start, &waypoints, &rooms, &furniture)?;
+    let mut keep = kept.iter();
+    furniture.retain(|_| *keep.next().unwrap());
+    for (r, open) in rooms.iter().zip(&open_rooms) {
+        if *open {
             waypoints.push(r.centre);
         }
     }
+    // walls come from the grid without furniture (the rooms closed again filled back in);
+    // furniture is separate polygons
+    set_cells(&mut grid, &furniture, Cell::Free);
+    for (r, _) in rooms.iter().zip(&open_rooms).filter(|(_, o)| !**o) {
+        wall_up(&mut grid, r);
+    }
     let mut map = StaticMap::new();
-    map.segments = walls_grid.wall_segments(cfg.wall_height, |c| c == Cell::Occupied);
+    map.segments = grid.wall_segments(cfg.wall_height, |c| c == Cell::Occupied);
+    set_cells(&mut grid, &furniture, Cell::Occupied);
     for (rect, height, _) in &furniture {
         map.add_polygon(Polygon::rect(rect[0], rect[1], rect[2], rect[3], *height))?;
     }
@@ -221,6 +206,15 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     let mut scenario = Scenario::new(format!("procedural_{kind}_{seed}"), map, start);
     scenario.goal = Some(goal);
     Ok(GeneratedSite { scenario, waypoints, grid })
+}
+
+/// Sets the cells of every piece of `furniture` to `c`.
+fn set_cells(grid: &mut OccupancyGrid, furniture: &[Furniture], c: Cell) {
+    for (_, _, cells) in furniture {
+        for &(i, j) in cells {
+            grid.set(i, j, c);
+        }
+    }
 }
 
 fn cells_in(grid: &OccupancyGrid, r: [Real; 4]) -> Vec<(usize, usize)> {

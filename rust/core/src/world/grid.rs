@@ -3,6 +3,7 @@
 //! Cell `(i, j)` is column `i` (along the grid's x) and row `j` counted from the *bottom*
 //! (along its y); its lower-left corner is `origin ∘ (i·res, j·res)`.
 
+use super::bitrow::{extract_runs, pack_cells, words_for};
 use super::geometry::{Point2, Pose2, Segment};
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -84,10 +85,12 @@ impl OccupancyGrid {
         let j0 = ((y0 / r - 0.5).ceil().max(0.0)) as usize;
         let i1 = ((x1 / r - 0.5).floor().min(self.width as Real - 1.0)) as i64;
         let j1 = ((y1 / r - 0.5).floor().min(self.height as Real - 1.0)) as i64;
-        for j in j0 as i64..=j1 {
-            for i in i0 as i64..=i1 {
-                self.set(i as usize, j as usize, c);
-            }
+        if i1 < i0 as i64 || j1 < j0 as i64 {
+            return;
+        }
+        let w = self.width;
+        for j in j0..=j1 as usize {
+            self.cells[j * w + i0..=j * w + i1 as usize].fill(c);
         }
     }
 
@@ -100,57 +103,101 @@ impl OccupancyGrid {
         }
         let i0 = (x0 / r - 0.5).ceil() as i64;
         let j0 = (y0 / r - 0.5).ceil() as i64;
-        let i1 = (x1 / r - 0.5).floor() as i64;
-        let j1 = (y1 / r - 0.5).floor() as i64;
-        (j0..=j1).all(|j| (i0..=i1).all(|i| self.get(i as usize, j as usize) == c))
+        let i1 = ((x1 / r - 0.5).floor() as i64).min(self.width as i64 - 1);
+        let j1 = ((y1 / r - 0.5).floor() as i64).min(self.height as i64 - 1);
+        if i1 < i0 || j1 < j0 {
+            return true;
+        }
+        let w = self.width;
+        (j0 as usize..=j1 as usize).all(|j| self.cells[j * w + i0 as usize..=j * w + i1 as usize].iter().fold(true, |acc, x| acc & (*x as u8 == c as u8)))
+    }
+
+    /// Row `j` of cells.
+    #[inline]
+    pub fn row(&self, j: usize) -> &[Cell] {
+        &self.cells[j * self.width..(j + 1) * self.width]
     }
 
     /// The boundary of the solid cells (those for which `solid` holds) as one-sided wall
     /// segments of `height` (m), the solid on each wall's left: every cell edge with a solid
     /// cell on exactly one side (the grid's outside is not solid), collinear neighbouring edges
-    /// with the solid on the same side merged into one straight run.
+    /// with the solid on the same side merged into one straight run. Horizontal walls come
+    /// first, by row then column; then vertical walls, by column then row.
+    ///
+    /// Rows are packed 64 cells to a word and only rows that differ from the row below are
+    /// looked at, so a grid of long straight walls costs little more than comparing its rows.
     pub fn wall_segments(&self, height: Real, solid: impl Fn(Cell) -> bool) -> Vec<Segment> {
         let (w, h) = (self.width, self.height);
-        let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h && solid(self.get(i as usize, j as usize));
         let r = self.resolution;
+        let select = [solid(Cell::Free), solid(Cell::Occupied), solid(Cell::Unknown)];
         let mut out = Vec::new();
-        let mut emit = |p: Point2, q: Point2, solid_left_when_forward: bool| {
+        let emit = |out: &mut Vec<Segment>, p: Point2, q: Point2, solid_left_when_forward: bool| {
             let (p, q) = (self.grid_to_world(p), self.grid_to_world(q));
             out.push(if solid_left_when_forward { Segment::one_sided(p, q, height) } else { Segment::one_sided(q, p, height) });
         };
-        // horizontal edges on grid line y = j, between rows j-1 and j; side: solid above?
-        for j in 0..=h as i64 {
-            let mut run: Option<(i64, bool)> = None;
-            for i in 0..=w as i64 {
-                let edge = (i < w as i64 && occ(i, j - 1) != occ(i, j)).then(|| occ(i, j));
-                if let Some((i0, above)) = run {
-                    if edge != Some(above) {
-                        // +x has +y on its left: forward when the solid is above
-                        emit([i0 as Real * r, j as Real * r], [i as Real * r, j as Real * r], above);
-                        run = None;
-                    }
-                }
-                if run.is_none() {
-                    run = edge.map(|s| (i, s));
-                }
+        // solid bits of the rows below and above grid line y = j (off the grid: not solid)
+        let (nw, lw) = (words_for(w), words_for(w + 1));
+        let (mut below, mut above) = (vec![0u64; nw], vec![0u64; nw]);
+        // per vertical grid line x = i (bit i): an open run of edges, its side, its first row
+        let (mut open, mut open_left) = (vec![0u64; lw], vec![0u64; lw]);
+        let mut open_from = vec![0usize; w + 1];
+        let (mut edge, mut left) = (vec![0u64; lw], vec![0u64; lw]);
+        let mut vertical: Vec<(usize, usize, usize, bool)> = Vec::new();
+        let (mut up, mut down, mut runs) = (vec![0u64; nw], vec![0u64; nw], Vec::new());
+        for j in 0..=h {
+            if j > 0 && j < h && rows_equal(self.row(j), self.row(j - 1)) {
+                continue; // no horizontal edge on this line, the vertical runs go on
             }
+            if j < h {
+                pack_cells(self.row(j), select, &mut above);
+            } else {
+                above.fill(0);
+            }
+            // horizontal edges on grid line y = j, in runs of one side, from left to right;
+            // +x has +y on its left: forward when the solid is above
+            for q in 0..nw {
+                up[q] = above[q] & !below[q];
+                down[q] = below[q] & !above[q];
+            }
+            runs.clear();
+            extract_runs(&up, &mut runs);
+            let n_up = runs.len();
+            extract_runs(&down, &mut runs);
+            let (ups, downs) = runs.split_at(n_up);
+            let (mut a, mut b) = (0, 0);
+            while a < ups.len() || b < downs.len() {
+                let take_up = b == downs.len() || (a < ups.len() && ups[a].0 < downs[b].0);
+                let (run, is_up) = if take_up { (ups[a], true) } else { (downs[b], false) };
+                if take_up { a += 1 } else { b += 1 }
+                emit(&mut out, [run.0 as Real * r, j as Real * r], [(run.1 + 1) as Real * r, j as Real * r], is_up);
+            }
+            // vertical edges of row j on grid lines x = i: solid on exactly one side, side =
+            // solid at -x; +y has -x on its left: forward when the solid is at -x
+            for q in 0..lw {
+                let cur = if q < nw { above[q] } else { 0 };
+                left[q] = (cur << 1) | if q > 0 { above[q - 1] >> 63 } else { 0 };
+                edge[q] = cur ^ left[q];
+            }
+            for q in 0..lw {
+                let going = open[q] & edge[q] & !(open_left[q] ^ left[q]);
+                let (mut close, mut start) = (open[q] & !going, edge[q] & !going);
+                while close != 0 {
+                    let i = q * 64 + close.trailing_zeros() as usize;
+                    vertical.push((i, open_from[i], j, open_left[q] >> (i % 64) & 1 == 1));
+                    close &= close - 1;
+                }
+                while start != 0 {
+                    open_from[q * 64 + start.trailing_zeros() as usize] = j;
+                    start &= start - 1;
+                }
+                open[q] = edge[q];
+                open_left[q] = left[q] & edge[q];
+            }
+            std::mem::swap(&mut below, &mut above);
         }
-        // vertical edges on grid line x = i, between columns i-1 and i; side: solid left (-x)?
-        for i in 0..=w as i64 {
-            let mut run: Option<(i64, bool)> = None;
-            for j in 0..=h as i64 {
-                let edge = (j < h as i64 && occ(i - 1, j) != occ(i, j)).then(|| occ(i - 1, j));
-                if let Some((j0, left)) = run {
-                    if edge != Some(left) {
-                        // +y has -x on its left: forward when the solid is at -x
-                        emit([i as Real * r, j0 as Real * r], [i as Real * r, j as Real * r], left);
-                        run = None;
-                    }
-                }
-                if run.is_none() {
-                    run = edge.map(|s| (j, s));
-                }
-            }
+        vertical.sort_unstable_by_key(|v| (v.0, v.1));
+        for (i, j0, j1, left) in vertical {
+            emit(&mut out, [i as Real * r, j0 as Real * r], [i as Real * r, j1 as Real * r], left);
         }
         out
     }
@@ -196,6 +243,15 @@ impl OccupancyGrid {
             }
         }
     }
+}
+
+/// Whether two rows of cells are equal (compared eight cells a word, no early exit within
+/// 64 cells).
+pub(crate) fn rows_equal(a: &[Cell], b: &[Cell]) -> bool {
+    use super::bitrow::cell_bytes;
+    let same = |x: &[Cell], y: &[Cell]| x.chunks_exact(8).zip(y.chunks_exact(8)).fold(0, |acc, (p, q)| acc | (cell_bytes(p) ^ cell_bytes(q))) == 0;
+    let tail = a.len() - a.len() % 8;
+    a.len() == b.len() && a.chunks_exact(64).zip(b.chunks_exact(64)).all(|(x, y)| same(x, y)) && same(&a[a.len() - a.len() % 64..tail], &b[b.len() - b.len() % 64..tail]) && a[tail..] == b[tail..]
 }
 
 /// 1D squared distance transform of sampled function `f` into `d`.
@@ -251,6 +307,99 @@ mod tests {
             let right = [m[0] + 0.01 * e[1].signum(), m[1] - 0.01 * e[0].signum()];
             let left = [m[0] - 0.01 * e[1].signum(), m[1] + 0.01 * e[0].signum()];
             assert!(s.one_sided && s.faces(right) && !s.faces(left) && !inside(right) && inside(left), "{s:?}");
+        }
+    }
+
+    /// The cell-by-cell scan `wall_segments` replaced: every line, every cell.
+    fn wall_segments_reference(g: &OccupancyGrid, height: Real, solid: impl Fn(Cell) -> bool) -> Vec<Segment> {
+        let (w, h) = (g.width, g.height);
+        let occ = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < w && (j as usize) < h && solid(g.get(i as usize, j as usize));
+        let r = g.resolution;
+        let mut out = Vec::new();
+        let mut emit = |p: Point2, q: Point2, fwd: bool| {
+            let (p, q) = (g.grid_to_world(p), g.grid_to_world(q));
+            out.push(if fwd { Segment::one_sided(p, q, height) } else { Segment::one_sided(q, p, height) });
+        };
+        for j in 0..=h as i64 {
+            let mut run: Option<(i64, bool)> = None;
+            for i in 0..=w as i64 {
+                let edge = (i < w as i64 && occ(i, j - 1) != occ(i, j)).then(|| occ(i, j));
+                if let Some((i0, above)) = run {
+                    if edge != Some(above) {
+                        emit([i0 as Real * r, j as Real * r], [i as Real * r, j as Real * r], above);
+                        run = None;
+                    }
+                }
+                if run.is_none() {
+                    run = edge.map(|s| (i, s));
+                }
+            }
+        }
+        for i in 0..=w as i64 {
+            let mut run: Option<(i64, bool)> = None;
+            for j in 0..=h as i64 {
+                let edge = (j < h as i64 && occ(i - 1, j) != occ(i, j)).then(|| occ(i - 1, j));
+                if let Some((j0, left)) = run {
+                    if edge != Some(left) {
+                        emit([i as Real * r, j0 as Real * r], [i as Real * r, j as Real * r], left);
+                        run = None;
+                    }
+                }
+                if run.is_none() {
+                    run = edge.map(|s| (j, s));
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn wall_segments_match_the_cell_by_cell_scan() {
+        let mut s = 7u64;
+        let mut next = |n: usize| {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 33) as usize % n
+        };
+        for case in 0..40 {
+            let (w, h) = (1 + next(200), 1 + next(50));
+            let mut g = OccupancyGrid::new(w, h, 0.05, Pose2::new(1.0, -2.0, 0.3 * case as Real), Cell::Free).unwrap();
+            for _ in 0..next(12) {
+                let (x0, y0) = (next(w), next(h));
+                let (x1, y1) = ((x0 + next(30)).min(w - 1), (y0 + next(30)).min(h - 1));
+                let c = [Cell::Occupied, Cell::Unknown, Cell::Free][next(3)];
+                for j in y0..=y1 {
+                    for i in x0..=x1 {
+                        g.set(i, j, c);
+                    }
+                }
+            }
+            for _ in 0..next(20) {
+                g.set(next(w), next(h), Cell::Occupied);
+            }
+            for solid in [|c: Cell| c == Cell::Occupied, |c: Cell| c != Cell::Free] {
+                assert_eq!(g.wall_segments(2.0, solid), wall_segments_reference(&g, 2.0, solid), "case {case}");
+            }
+        }
+    }
+
+    #[test]
+    fn fill_rect_and_rect_is_follow_cell_centres() {
+        let boxes = [(0.12, 0.31, 0.77, 0.52), (-1.0, -1.0, 0.1, 0.1), (0.4, 0.2, 9.0, 0.23), (0.3, 0.3, 0.31, 0.31), (0.6, 0.1, 0.2, 0.5)];
+        for (k, &(x0, y0, x1, y1)) in boxes.iter().enumerate() {
+            let mut g = OccupancyGrid::new(17, 12, 0.05, Pose2::default(), Cell::Free).unwrap();
+            g.fill_rect(x0, y0, x1, y1, Cell::Occupied);
+            let mut any = false;
+            for j in 0..12 {
+                for i in 0..17 {
+                    let (cx, cy) = ((i as Real + 0.5) * 0.05, (j as Real + 0.5) * 0.05);
+                    let want = cx >= x0 && cx <= x1 && cy >= y0 && cy <= y1;
+                    assert_eq!(g.get(i, j) == Cell::Occupied, want, "box {k} cell ({i}, {j})");
+                    any |= want;
+                }
+            }
+            let inside_grid = x0 >= 0.0 && y0 >= 0.0 && x1 <= 17.0 * 0.05 && y1 <= 12.0 * 0.05;
+            assert_eq!(g.rect_is(x0, y0, x1, y1, Cell::Occupied), inside_grid, "box {k}");
+            assert_eq!(g.rect_is(x0, y0, x1, y1, Cell::Free), inside_grid && !any, "box {k}");
         }
     }
 

@@ -3,6 +3,8 @@
 //! Geometry is planar `f64` wall segments extruded from the floor to a height (for the 3D
 //! LIDAR). Polygons (furniture, pillars) are stored as their edges.
 
+mod bitrow;
+mod cspace;
 pub mod generate;
 mod geometry;
 pub mod grid;
