@@ -160,28 +160,36 @@ fn reachable(walls: &[Segment], start: Point2) -> Result<(OccupancyGrid, Vec<boo
             format!("lies on a wall at ({:.3}, {:.3})", start[0], start[1]),
         ));
     }
-    let mut stack = vec![(j0 * w + i0) as u32];
-    seen[j0 * w + i0] = true;
-    while let Some(c) = stack.pop() {
-        let c = c as usize;
-        let (i, j) = (c % w, c / w);
-        let mut visit = |n: usize| {
-            if !seen[n] && grid.cells[n] == Cell::Free {
-                seen[n] = true;
-                stack.push(n as u32);
+    // scanline fill: each popped seed fills its whole free run, then seeds the rows above
+    // and below once per free run they touch
+    let free = |c: usize| grid.cells[c] == Cell::Free;
+    let mut stack = vec![(i0, j0)];
+    while let Some((i, j)) = stack.pop() {
+        let row = j * w;
+        if seen[row + i] {
+            continue;
+        }
+        let (mut a, mut b) = (i, i);
+        while a > 0 && free(row + a - 1) && !seen[row + a - 1] {
+            a -= 1;
+        }
+        while b + 1 < w && free(row + b + 1) && !seen[row + b + 1] {
+            b += 1;
+        }
+        seen[row + a..=row + b].iter_mut().for_each(|v| *v = true);
+        for nj in [j.wrapping_sub(1), j + 1] {
+            if nj >= h {
+                continue;
             }
-        };
-        if i > 0 {
-            visit(c - 1);
-        }
-        if i + 1 < w {
-            visit(c + 1);
-        }
-        if j > 0 {
-            visit(c - w);
-        }
-        if j + 1 < h {
-            visit(c + w);
+            let nrow = nj * w;
+            let mut in_run = false;
+            for x in a..=b {
+                let open = free(nrow + x) && !seen[nrow + x];
+                if open && !in_run {
+                    stack.push((x, nj));
+                }
+                in_run = open;
+            }
         }
     }
     Ok((grid, seen))
