@@ -7,10 +7,9 @@ use std::path::PathBuf;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use shieldnav_core::env::{AutoReset, Batch, Site, SlotOutcome};
-use shieldnav_core::world::{load_ros_map, Scenario};
+use shieldnav_core::env::{AutoReset, Batch, SlotOutcome};
 
-use crate::config::episode_config;
+use crate::config::{episode_config, SiteArgs};
 use crate::episode::summary_dict;
 use crate::errors::{invalid, to_py};
 
@@ -38,10 +37,8 @@ impl PyBatch {
     #[pyo3(signature = (num_envs, seeds, *, preset=None, procedural=false, ros_map=None, scenario=None, autoreset_mode="next_step", threads=2, **kwargs))]
     #[allow(clippy::too_many_arguments)]
     fn new(py: Python<'_>, num_envs: usize, seeds: &Bound<'_, PyAny>, preset: Option<String>, procedural: bool, ros_map: Option<PathBuf>, scenario: Option<PathBuf>, autoreset_mode: &str, threads: usize, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
-        let sources = preset.is_some() as u8 + procedural as u8 + ros_map.is_some() as u8 + scenario.is_some() as u8;
-        if sources != 1 {
-            return Err(invalid("site", format!("give exactly one of preset, procedural=True, ros_map, scenario (got {sources})")));
-        }
+        let args = SiteArgs { preset, procedural, ros_map, scenario };
+        args.check()?;
         if num_envs == 0 {
             return Err(invalid("num_envs", "must be at least 1"));
         }
@@ -50,15 +47,7 @@ impl PyBatch {
         let (config, opts) = episode_config(kwargs)?;
         let inner = py
             .detach(move || {
-                let site = if let Some(name) = preset {
-                    Site::Preset(name)
-                } else if procedural {
-                    Site::Procedural(opts.generator)
-                } else if let Some(path) = ros_map {
-                    Site::Scenario(Box::new(load_ros_map(path, &opts.ros_map)?.scenario))
-                } else {
-                    Site::Scenario(Box::new(Scenario::from_json_file(scenario.unwrap_or_default())?))
-                };
+                let site = args.load(&opts)?;
                 Batch::new(site, config, &seeds, mode, threads)
             })
             .map_err(to_py)?;

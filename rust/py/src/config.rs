@@ -8,7 +8,44 @@ use shieldnav_core::shield::ShieldMethod;
 use shieldnav_core::world::generate::{GeneratorConfig, SiteKind};
 use shieldnav_core::world::RosMapOptions;
 
+use std::path::PathBuf;
+
+use shieldnav_core::env::Site;
+use shieldnav_core::world::{load_ros_map, Scenario};
+
 use crate::errors::invalid;
+
+/// Where an episode's world comes from, as the Python keywords give it (exactly one).
+pub struct SiteArgs {
+    pub preset: Option<String>,
+    pub procedural: bool,
+    pub ros_map: Option<PathBuf>,
+    pub scenario: Option<PathBuf>,
+}
+
+impl SiteArgs {
+    /// Checks that exactly one source is given.
+    pub fn check(&self) -> PyResult<()> {
+        let n = self.preset.is_some() as u8 + self.procedural as u8 + self.ros_map.is_some() as u8 + self.scenario.is_some() as u8;
+        if n != 1 {
+            return Err(invalid("site", format!("give exactly one of preset, procedural=True, ros_map, scenario (got {n})")));
+        }
+        Ok(())
+    }
+
+    /// The core's site (loads a map or scenario file; call detached from the GIL).
+    pub fn load(self, opts: &SiteOptions) -> shieldnav_core::Result<Site> {
+        Ok(if let Some(name) = self.preset {
+            Site::Preset(name)
+        } else if self.procedural {
+            Site::Procedural(opts.generator)
+        } else if let Some(path) = self.ros_map {
+            Site::Scenario(Box::new(load_ros_map(path, &opts.ros_map)?.scenario))
+        } else {
+            Site::Scenario(Box::new(Scenario::from_json_file(self.scenario.unwrap_or_default())?))
+        })
+    }
+}
 
 /// Every plain `key → field` of the episode configuration.
 macro_rules! each_field {

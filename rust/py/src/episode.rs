@@ -7,10 +7,10 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyUntypedArray
 use pyo3::intern;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use shieldnav_core::env::{Episode, EpisodeSummary, Site, StepReport};
-use shieldnav_core::world::{load_ros_map, Pose2, Scenario};
+use shieldnav_core::env::{Episode, EpisodeSummary, StepReport};
+use shieldnav_core::world::Pose2;
 
-use crate::config::{episode_config, episode_defaults};
+use crate::config::{episode_config, episode_defaults, SiteArgs};
 use crate::errors::{invalid, to_py};
 
 fn pose_tuple(p: Pose2) -> (f64, f64, f64) {
@@ -115,27 +115,12 @@ impl PyEpisode {
         seed: u64,
         kwargs: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let sources = preset.is_some() as u8
-            + procedural as u8
-            + ros_map.is_some() as u8
-            + scenario.is_some() as u8;
-        if sources != 1 {
-            return Err(invalid("site", format!("give exactly one of preset, procedural=True, ros_map, scenario (got {sources})")));
-        }
+        let args = SiteArgs { preset, procedural, ros_map, scenario };
+        args.check()?;
         let (config, opts) = episode_config(kwargs)?;
         let inner = py
             .detach(move || {
-                let site = if let Some(name) = preset {
-                    Site::Preset(name)
-                } else if procedural {
-                    Site::Procedural(opts.generator)
-                } else if let Some(path) = ros_map {
-                    Site::Scenario(Box::new(load_ros_map(path, &opts.ros_map)?.scenario))
-                } else {
-                    Site::Scenario(Box::new(Scenario::from_json_file(
-                        scenario.unwrap_or_default(),
-                    )?))
-                };
+                let site = args.load(&opts)?;
                 Episode::new(site, config, seed)
             })
             .map_err(to_py)?;
