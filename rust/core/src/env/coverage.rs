@@ -259,18 +259,18 @@ impl Coverage {
 
     /// Marks the pieces the camera sees at `scan` (its sensor pose, its ranges) within
     /// `range` (m) and the horizontal field of view `fov_h` (rad); returns the newly inspected
-    /// length (m). `elevations` are the scan's channel elevations (rad).
-    pub fn update(&mut self, scan: &Scan, elevations: &[Real], fov_h: Real, range: Real) -> Real {
+    /// length (m). `cos_el` holds the cosine of each channel's elevation.
+    pub fn update(&mut self, scan: &Scan, cos_el: &[Real], fov_h: Real, range: Real) -> Real {
         let sp = scan.sensor_pose;
         let cols = scan.columns;
         if cols == 0 || self.pieces.is_empty() {
             return 0.0;
         }
         // the channel nearest the horizon is the camera's line of sight
-        let (k, cos_el) = elevations
+        let (k, cos_el) = cos_el
             .iter()
+            .copied()
             .enumerate()
-            .map(|(k, e)| (k, e.cos()))
             .fold((0, -1.0), |a, b| if b.1 > a.1 { b } else { a });
         let ranges = &scan.ranges[k * cols..(k + 1) * cols];
         let step = std::f64::consts::TAU / cols as Real;
@@ -428,19 +428,19 @@ mod tests {
         };
         let fov = 69.4_f64.to_radians();
         assert_eq!(
-            cov.update(&scan, &[0.0], fov, 2.0),
+            cov.update(&scan, &[1.0], fov, 2.0),
             0.0,
             "the wall is 3 m away, beyond range 2 m"
         );
-        let new = cov.update(&scan, &[0.0], fov, 4.0);
+        let new = cov.update(&scan, &[1.0], fov, 4.0);
         // at 3 m, ±34.7° spans ±2.08 m of the right wall, which is only ±2 m tall: the whole wall
         assert!((new - 4.0).abs() < 1e-9, "{new}");
         assert!((cov.fraction() - 0.2).abs() < 1e-9);
-        assert_eq!(cov.update(&scan, &[0.0], fov, 4.0), 0.0, "inspected once");
+        assert_eq!(cov.update(&scan, &[1.0], fov, 4.0), 0.0, "inspected once");
         // a blocked line of sight: ranges cut short at 1 m inspect nothing new on the top wall
         let mut blocked = scan.clone();
         blocked.sensor_pose = Pose2::new(3.0, 2.0, std::f64::consts::FRAC_PI_2);
         blocked.ranges.iter_mut().for_each(|r| *r = 1.0);
-        assert_eq!(cov.update(&blocked, &[0.0], fov, 4.0), 0.0);
+        assert_eq!(cov.update(&blocked, &[1.0], fov, 4.0), 0.0);
     }
 }

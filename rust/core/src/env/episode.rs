@@ -403,9 +403,8 @@ impl Episode {
     /// Inspects what the latest scan sees; returns the new length (m).
     fn inspect(&mut self) -> Real {
         let range = self.config.planner.d_view + self.config.coverage.margin;
-        let el = self.config.world.lidar.elevations();
         self.coverage
-            .update(self.world.scan(), &el, self.config.planner.fov_h, range)
+            .update(self.world.scan(), &self.cos_el, self.config.planner.fov_h, range)
     }
 
     /// The robot's motion since the latest scan: the pose of the scan's body frame in the
