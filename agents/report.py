@@ -68,14 +68,14 @@ def write_files(results: list[dict[str, Any]], rows: dict[tuple[str, str], dict[
     out.mkdir(parents=True, exist_ok=True)
     episodes = [{"task": r["task"], "summary": r["summary"], "steps_per_s": r["steps_per_s"]} for r in results]
     aggregate_list = [{"scenario": k[0], "shield": k[1], **v} for k, v in rows.items()]
-    (out / "benchmark.json").write_text(json.dumps({"aggregate": aggregate_list, "episodes": episodes}, indent=1, default=_json))
+    (out / "benchmark.json").write_text(json.dumps({"aggregate": aggregate_list, "episodes": episodes}, indent=1, default=json_default))
     with open(out / "benchmark.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["scenario", "shield"] + [c for c, _ in COLUMNS])
         w.writeheader()
         w.writerows(aggregate_list)
 
 
-def _json(v: Any) -> Any:
+def json_default(v: Any) -> Any:
     if isinstance(v, np.generic):
         return v.item()
     raise TypeError(f"not JSON serialisable: {type(v).__name__}")
