@@ -12,7 +12,7 @@ ENV_IDS: dict[str, tuple[dict[str, object], int]] = {
     "shieldnav/CorridorInspection-v0": ({"procedural": True}, 3000),
     # the paper's Scenario 1: a doorway narrowed by a misplaced cabinet
     "shieldnav/ConstrictedPassage-v0": ({"preset": "constricted_passage", "terminate_at_goal": True}, 1500),
-    # Scenario 2: a self-similar corridor, the odometry jumps 120 m at 20 s; the paper widens
+    # Scenario 2: a self-similar corridor, the odometry jumps 100 m (and 1.5 m across) at 20 s; the paper widens
     # the ellipse to a_y = 0.6 m there
     "shieldnav/OdometryJump-v0": ({"preset": "odometry_jump", "semi_axes": [0.9, 0.6], "terminate_at_goal": True}, 2500),
     # Scenario 3: a chair pushed toward the robot at 9 s, a door swinging open at 20 s
