@@ -101,7 +101,9 @@ def plot_scenario(scenario: str, traces: dict[str, dict[str, Any]], timing: dict
                 ax[0, k].set(title=f"body-frame u_{name} (composite)", xlabel="t (s)", ylabel="m/s")
                 ax[0, k].legend()
         ax[0, 2].plot(t, tr["H"], lw=1, label=f"H ({shield})")
-        ax[1, 0].plot(t, tr["h_min"], lw=1, label=f"min h_i ({shield})")
+        h_min = np.asarray(tr["h_min"], dtype=np.float64)
+        h_min[h_min >= 1e300] = np.nan  # the shield reports f64::MAX for a scan with no point in the crop
+        ax[1, 0].plot(t, h_min, lw=1, label=f"min h_i ({shield})")
     ax[0, 2].axhline(0, color="k", lw=0.5)
     ax[0, 2].set(title="composite barrier H", xlabel="t (s)")
     ax[0, 2].legend(fontsize=8)
