@@ -149,3 +149,23 @@ def test_scenario_file_round_trip(tmp_path):
     w = World(scenario=str(scen), range_noise_std=0.0)
     assert w.name == "mine"
     assert w.ranges[0, 256] == pytest.approx(1.0, abs=1e-12)  # +y wall, 1 m away
+
+
+def test_scan_poses_and_contacts_are_live_read_only_views_without_copies():
+    w = World(preset="constricted_passage", range_noise_std=0.0)
+    ranges, points, pose = w.ranges, w.points, w.true_pose
+    for a in (ranges, points, pose, w.estimated_pose, w.sensor_pose, w.contacts):
+        assert a.base is w, "a view of the world's own buffer"
+        assert not a.flags.writeable
+    assert np.shares_memory(ranges, w.ranges) and np.shares_memory(points, w.points)
+    first = ranges.copy()
+    for _ in range(10):  # 0.2 s: two new scans
+        w.step(0.5, 0.0, 0.0)
+    assert not np.array_equal(first, ranges), "the view follows the world"
+    np.testing.assert_array_equal(pose, w.true_pose)
+    assert pose[0] > 1.0
+    assert_scan_matches(w, columns=1024)
+    with pytest.raises(ValueError, match="read-only"):
+        ranges[0, 0] = 1.0
+    del w  # the views keep the world alive
+    assert np.isfinite(ranges).any()

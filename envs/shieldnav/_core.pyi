@@ -132,7 +132,11 @@ class NominalController:
 
 @final
 class World:
-    """A simulated corridor world: walls, obstacles, the robot's body, LIDAR and odometry."""
+    """A simulated corridor world: walls, obstacles, the robot's body, LIDAR and odometry.
+
+    `ranges`, `points`, the poses and `contacts` are live read-only views of the world's own
+    buffers (no copy); they follow the world as it steps, `.copy()` keeps one.
+    """
 
     def __new__(
         cls,

@@ -2,23 +2,79 @@
 //! step it with a body-frame command, read the LIDAR, poses and contacts as numpy arrays.
 //! Each method converts, calls `shieldnav_core::world::World`, and maps errors; nothing here
 //! computes.
+//!
+//! The scan, poses and contacts are read-only numpy views of buffers this object owns
+//! (allocated once with their final shape, never reallocated): reading them copies nothing,
+//! and they follow the world as it steps. The buffers are written after each step with the
+//! GIL held, so no Python thread reads them mid-write.
 
 use std::path::PathBuf;
 
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::ndarray::{Array1, Array2, ArrayBase, Data, Dimension};
+use numpy::{Element, IntoPyArray, PyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use shieldnav_core::robot::{RobotShape, TrackerConfig};
 use shieldnav_core::sensors::{LidarConfig, LidarMount};
 use shieldnav_core::world::generate::{GeneratorConfig, SiteKind};
-use shieldnav_core::world::{Pose2, RosMapOptions, World, WorldConfig};
+use shieldnav_core::world::{RosMapOptions, World, WorldConfig};
 
 use crate::errors::{to_py, InvalidArgumentError};
 
-fn pose_array<'py>(py: Python<'py>, p: Pose2) -> Bound<'py, PyArray1<f64>> {
-    vec![p.x, p.y, p.yaw].into_pyarray(py)
+/// A read-only numpy array over `data`, which `owner` holds.
+///
+/// SAFETY (of the callers): `data` lives inside `owner`'s Rust struct and is never reallocated
+/// (only overwritten in place, with the GIL held), so it outlives the array, which keeps
+/// `owner` alive as its base.
+fn view<'py, T: Element, S: Data<Elem = T>, D: Dimension>(data: &ArrayBase<S, D>, owner: &Bound<'py, PyWorld>) -> Bound<'py, PyArray<T, D>> {
+    let array = unsafe { PyArray::borrow_from_array(data, owner.clone().into_any()) };
+    // a new array has no borrows, so this cannot fail; the flag stays after the guard drops
+    if let Ok(rw) = array.try_readwrite() {
+        drop(rw.make_nonwriteable());
+    }
+    array
+}
+
+/// The buffers behind the views: written after every step, shapes fixed at construction.
+struct Views {
+    /// (channels, columns) ranges.
+    ranges: Array2<f64>,
+    /// (channels * columns, 3) body-frame points.
+    points: Array2<f64>,
+    /// Rows: true pose, odometry estimate, sensor pose at the latest scan; `[x, y, yaw]`.
+    poses: Array2<f64>,
+    /// `[count, with_walls, with_obstacles, max_penetration]`.
+    contacts: Array1<f64>,
+}
+
+impl Views {
+    fn new(world: &World) -> Self {
+        let s = world.scan();
+        let mut v = Self { ranges: Array2::zeros((s.channels, s.columns)), points: Array2::zeros((s.points.len(), 3)), poses: Array2::zeros((3, 3)), contacts: Array1::zeros(4) };
+        v.update(world);
+        v
+    }
+
+    /// Copies the world's state in place (no reallocation: shapes never change).
+    fn update(&mut self, world: &World) {
+        let s = world.scan();
+        for (dst, src) in self.ranges.iter_mut().zip(&s.ranges) {
+            *dst = *src;
+        }
+        for (mut row, p) in self.points.rows_mut().into_iter().zip(&s.points) {
+            row[0] = p[0];
+            row[1] = p[1];
+            row[2] = p[2];
+        }
+        for (k, p) in [world.true_pose(), world.estimated_pose(), s.sensor_pose].into_iter().enumerate() {
+            self.poses[[k, 0]] = p.x;
+            self.poses[[k, 1]] = p.y;
+            self.poses[[k, 2]] = p.yaw;
+        }
+        let c = world.contacts();
+        self.contacts.assign(&Array1::from(vec![c.count as f64, c.with_walls as f64, c.with_obstacles as f64, c.max_penetration]));
+    }
 }
 
 /// A simulated corridor world: walls, scripted obstacles, the robot's rapier body and
@@ -30,6 +86,7 @@ fn pose_array<'py>(py: Python<'py>, p: Pose2) -> Bound<'py, PyArray1<f64>> {
 #[pyclass(name = "World", module = "shieldnav._core")]
 pub struct PyWorld {
     inner: World,
+    views: Views,
 }
 
 #[pymethods]
@@ -97,7 +154,8 @@ impl PyWorld {
                 }
             })
             .map_err(to_py)?;
-        Ok(Self { inner: world })
+        let views = Views::new(&world);
+        Ok(Self { inner: world, views })
     }
 
     /// Advances one control period with the body-frame command (m/s, m/s, rad/s). Returns a
@@ -105,6 +163,7 @@ impl PyWorld {
     fn step<'py>(&mut self, py: Python<'py>, vx: f64, vy: f64, wz: f64) -> PyResult<Bound<'py, PyDict>> {
         let inner = &mut self.inner;
         let out = py.detach(move || inner.step([vx, vy, wz])).map_err(to_py)?;
+        self.views.update(&self.inner);
         let d = PyDict::new(py);
         d.set_item("time", out.time)?;
         d.set_item("scanned", out.scanned)?;
@@ -120,22 +179,18 @@ impl PyWorld {
         self.inner.time()
     }
 
-    /// Latest ranges, shape (channels, columns), m; `inf` where there is no return.
+    /// Latest ranges, shape (channels, columns), m; `inf` where there is no return. A live,
+    /// read-only view (no copy): it follows the world as it steps; `.copy()` keeps a scan.
     #[getter]
-    fn ranges<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let s = self.inner.scan();
-        let a = Array2::from_shape_vec((s.channels, s.columns), s.ranges.clone()).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        Ok(a.into_pyarray(py))
+    fn ranges<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray2<f64>> {
+        view(&this.borrow().views.ranges, this)
     }
 
     /// Latest body-frame points, shape (channels * columns, 3), m; NaN rows where there is no
-    /// return.
+    /// return. A live, read-only view like `ranges`.
     #[getter]
-    fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let s = self.inner.scan();
-        let flat: Vec<f64> = s.points.iter().flatten().copied().collect();
-        let a = Array2::from_shape_vec((s.points.len(), 3), flat).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        Ok(a.into_pyarray(py))
+    fn points<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray2<f64>> {
+        view(&this.borrow().views.points, this)
     }
 
     /// Time (s) of the latest scan.
@@ -144,29 +199,29 @@ impl PyWorld {
         self.inner.scan().stamp
     }
 
-    /// The sensor's true planar pose `[x, y, yaw]` when the latest scan was taken.
+    /// The sensor's true planar pose `[x, y, yaw]` when the latest scan was taken (live view).
     #[getter]
-    fn sensor_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        pose_array(py, self.inner.scan().sensor_pose)
+    fn sensor_pose<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray1<f64>> {
+        view(&this.borrow().views.poses.row(2), this)
     }
 
-    /// The robot's true pose `[x, y, yaw]`.
+    /// The robot's true pose `[x, y, yaw]` (live view).
     #[getter]
-    fn true_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        pose_array(py, self.inner.true_pose())
+    fn true_pose<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray1<f64>> {
+        view(&this.borrow().views.poses.row(0), this)
     }
 
-    /// The odometry estimate `[x, y, yaw]`.
+    /// The odometry estimate `[x, y, yaw]` (live view).
     #[getter]
-    fn estimated_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        pose_array(py, self.inner.estimated_pose())
+    fn estimated_pose<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray1<f64>> {
+        view(&this.borrow().views.poses.row(1), this)
     }
 
-    /// Contacts after the last step: `[count, with_walls, with_obstacles, max_penetration]`.
+    /// Contacts after the last step: `[count, with_walls, with_obstacles, max_penetration]`
+    /// (live view).
     #[getter]
-    fn contacts<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let c = self.inner.contacts();
-        vec![c.count as f64, c.with_walls as f64, c.with_obstacles as f64, c.max_penetration].into_pyarray(py)
+    fn contacts<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray1<f64>> {
+        view(&this.borrow().views.contacts, this)
     }
 
     /// Every wall now (static and moving obstacles), shape (M, 5): `ax, ay, bx, by, height`.
