@@ -63,11 +63,21 @@ pub fn bin_ranges(scan: &Scan, cos_el: &[Real], max_range: Real, out: &mut [f32]
     let cols = scan.columns;
     for (k, c) in cos_el.iter().enumerate() {
         let row = &scan.ranges[k * cols..(k + 1) * cols];
-        for (i, &r) in row.iter().enumerate() {
-            let b = ((i * bins + cols / 2) / cols) % bins;
+        // column i goes to bin ((i · bins + cols / 2) / cols) mod bins; walked without a
+        // division per column (quotient `b`, remainder `rem`)
+        let (mut b, mut rem) = (0, cols / 2);
+        for &r in row {
             let v = (r * c / max_range) as f32;
             if v < out[b] {
                 out[b] = v;
+            }
+            rem += bins;
+            while rem >= cols {
+                rem -= cols;
+                b += 1;
+            }
+            if b == bins {
+                b = 0;
             }
         }
     }
@@ -93,5 +103,21 @@ mod tests {
         let mut out = [0.0f32; 4];
         bin_ranges(&scan, &[1.0], 20.0, &mut out);
         assert_eq!(out, [0.1, 0.5, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn bins_match_the_division_formula_for_any_counts() {
+        for (cols, bins) in [(1024, 64), (512, 64), (1000, 7), (16, 4), (8, 32), (2048, 1), (5, 5)] {
+            let ranges: Vec<Real> = (0..cols).map(|i| 0.5 + ((i * 7919) % 101) as Real * 0.1).collect();
+            let scan = Scan { channels: 1, columns: cols, ranges: ranges.clone(), ..Default::default() };
+            let mut got = vec![0.0f32; bins];
+            bin_ranges(&scan, &[1.0], 20.0, &mut got);
+            let mut want = vec![1.0f32; bins];
+            for (i, r) in ranges.iter().enumerate() {
+                let b = ((i * bins + cols / 2) / cols) % bins;
+                want[b] = want[b].min((r / 20.0) as f32);
+            }
+            assert_eq!(got, want, "cols {cols} bins {bins}");
+        }
     }
 }
