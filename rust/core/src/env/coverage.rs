@@ -285,6 +285,9 @@ impl Coverage {
             f(sp.y - range, self.origin[1], self.ny),
             f(sp.y + range, self.origin[1], self.ny),
         );
+        let (ys, yc) = sp.yaw.sin_cos();
+        let far2 = range * range * (1.0 + 1e-9);
+        let front_only = half < std::f64::consts::FRAC_PI_2;
         let mut new = 0.0;
         for j in j0..=j1 {
             for i in i0..=i1 {
@@ -294,7 +297,16 @@ impl Coverage {
                     if self.inspected[id] {
                         continue;
                     }
-                    let q = sp.inverse_transform_point(self.pieces[id].mid);
+                    // = sp.inverse_transform_point(mid), with the sine and cosine taken once
+                    let m = self.pieces[id].mid;
+                    let (dx, dy) = (m[0] - sp.x, m[1] - sp.y);
+                    let q = [yc * dx + ys * dy, -ys * dx + yc * dy];
+                    // cheap rejections first: well out of range, or behind a camera narrower
+                    // than a half turn; then the exact tests
+                    let d2 = q[0] * q[0] + q[1] * q[1];
+                    if d2 > far2 || (front_only && q[0] < 0.0) {
+                        continue;
+                    }
                     let d = q[0].hypot(q[1]);
                     if d > range {
                         continue;

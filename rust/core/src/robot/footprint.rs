@@ -52,18 +52,26 @@ pub fn footprint_segment_distance(shape: &RobotShape, pose: Pose2, s: &Segment) 
     let b = pose.inverse_transform_point(s.b);
     let inside = |p: Point2| p[0].abs() <= hx && p[1].abs() <= hy;
     let corners = [[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]];
-    let seg = Segment::new(a, b, 1.0);
     let crosses = inside(a) || inside(b) || (0..4).any(|k| segments_cross(corners[k], corners[(k + 1) % 4], a, b));
     if crosses {
         return 0.0;
     }
-    let to_rect = |p: Point2| {
+    // squared distances, one root at the end (no libm `hypot` in this per-step hot path)
+    let to_rect2 = |p: Point2| {
         let dx = (p[0].abs() - hx).max(0.0);
         let dy = (p[1].abs() - hy).max(0.0);
-        dx.hypot(dy)
+        dx * dx + dy * dy
     };
-    let d = [to_rect(a), to_rect(b)].into_iter().chain(corners.iter().map(|&c| seg.distance_to_point(c))).fold(Real::INFINITY, Real::min);
-    (d - r).max(0.0)
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let l2 = e[0] * e[0] + e[1] * e[1];
+    let to_seg2 = |c: Point2| {
+        let w = [c[0] - a[0], c[1] - a[1]];
+        let t = if l2 > 0.0 { ((w[0] * e[0] + w[1] * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+        let (x, y) = (w[0] - t * e[0], w[1] - t * e[1]);
+        x * x + y * y
+    };
+    let d2 = [to_rect2(a), to_rect2(b)].into_iter().chain(corners.iter().map(|&c| to_seg2(c))).fold(Real::INFINITY, Real::min);
+    (d2.sqrt() - r).max(0.0)
 }
 
 fn segments_cross(p: Point2, q: Point2, a: Point2, b: Point2) -> bool {

@@ -278,44 +278,49 @@ impl Lidar {
     /// Sweeps one wall given in the sensor frame, `dmin` its distance from the sensor.
     #[inline]
     pub(super) fn sweep_segment(&self, a: [Real; 2], b: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
-        use std::f64::consts::TAU;
-        let inv_step = self.config.columns as Real / TAU;
-        let fa = fast_atan2(a[1], a[0]);
-        let fb = fast_atan2(b[1], b[0]);
         let cr = cross2(a, b);
-        let ccw = |from: Real, to: Real| {
-            let d = to - from;
-            if d < 0.0 {
-                d + TAU
-            } else {
-                d
-            }
-        };
-        let (start, span) = if cr > 0.0 {
-            (fa, ccw(fa, fb))
-        } else if cr < 0.0 {
-            (fb, ccw(fb, fa))
-        } else {
+        if cr == 0.0 {
             // collinear with the sensor: only the beams at the end points can hit
-            self.sweep(a, b, height, fa, 0.0, inv_step, zs, dmin, best);
-            (fb, 0.0)
-        };
-        self.sweep(a, b, height, start, span, inv_step, zs, dmin, best);
+            let inv_step = self.config.columns as Real / std::f64::consts::TAU;
+            for p in [a, b] {
+                let f = fast_atan2(p[1], p[0]) * inv_step;
+                let j0 = ifloor(f) - 1;
+                self.sweep(a, b, height, j0, ((iceil(f) + 1 - j0 + 1) as usize).min(self.config.columns), zs, dmin, best);
+            }
+            return;
+        }
+        let (j0, count) = self.wall_beams(a, b, cr);
+        self.sweep(a, b, height, j0, count, zs, dmin, best);
     }
 
-    /// Visits the beams of the angular interval `[start, start + span]` (with one beam of
-    /// margin each side, for the approximate angles) and keeps exact nearest hits. `dmin` is
-    /// the segment's distance from the sensor: a planar beam already nearer skips the test.
+    /// The beams a wall `a b` (sensor frame, `cr = a × b ≠ 0`) can hit: the first column (any
+    /// integer, taken modulo the column count) and how many, with one beam of margin each side
+    /// for the approximate angles.
+    #[inline]
+    pub(super) fn wall_beams(&self, a: [Real; 2], b: [Real; 2], cr: Real) -> (i64, usize) {
+        use std::f64::consts::TAU;
+        let n = self.config.columns;
+        let inv_step = n as Real / TAU;
+        let fa = fast_atan2(a[1], a[0]);
+        let fb = fast_atan2(b[1], b[0]);
+        // counter-clockwise from the start to the end
+        let (start, end) = if cr > 0.0 { (fa, fb) } else { (fb, fa) };
+        let span = if end < start { end - start + TAU } else { end - start };
+        let j0 = ifloor(start * inv_step) - 1;
+        let j1 = iceil((start + span) * inv_step) + 1;
+        (j0, ((j1 - j0 + 1) as usize).min(n))
+    }
+
+    /// Visits `count` beams from column `j0` (modulo the column count) and keeps exact nearest
+    /// hits of the wall `a b` (sensor frame). `dmin` is the wall's distance from the sensor: a
+    /// planar beam already nearer skips the test.
     ///
     /// The hit test is division-free (`t = (a×e)/(d×e) ≥ 0` and `s = (a×d)/(d×e) ∈ [0, 1]`
     /// compared by sign); the one division gives `t` exactly as [`ray_segment_distance`].
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn sweep(&self, a: [Real; 2], b: [Real; 2], height: Real, start: Real, span: Real, inv_step: Real, zs: Real, dmin: Real, best: &mut [Real]) {
+    pub(super) fn sweep(&self, a: [Real; 2], b: [Real; 2], height: Real, j0: i64, count: usize, zs: Real, dmin: Real, best: &mut [Real]) {
         let n = self.config.columns;
-        let j0 = (start * inv_step).floor() as i64 - 1;
-        let j1 = ((start + span) * inv_step).ceil() as i64 + 1;
-        let count = ((j1 - j0 + 1) as usize).min(n);
         let e = [b[0] - a[0], b[1] - a[1]];
         let ae = cross2(a, e);
         let planar = self.config.channels == 1;
@@ -410,6 +415,20 @@ pub(super) fn seg_origin_distance(a: [Real; 2], b: [Real; 2]) -> Real {
     let t = if l2 > 0.0 { (-(a[0] * e[0] + a[1] * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
     let (x, y) = (a[0] + t * e[0], a[1] + t * e[1]);
     (x * x + y * y).sqrt()
+}
+
+/// `x.floor()` as an integer, for `|x| < 2^62`, without a libm call.
+#[inline]
+pub(super) fn ifloor(x: Real) -> i64 {
+    let i = x as i64;
+    i - ((i as Real) > x) as i64
+}
+
+/// `x.ceil()` as an integer, for `|x| < 2^62`, without a libm call.
+#[inline]
+pub(super) fn iceil(x: Real) -> i64 {
+    let i = x as i64;
+    i + ((i as Real) < x) as i64
 }
 
 /// `atan2` to about 1e-5 rad: only used to pick the beams to test, with a beam of margin

@@ -1,17 +1,15 @@
 //! The LIDAR on big maps: walls fetched bucket by bucket from a [`SegmentIndex`], nearest
-//! buckets first, and a planar scan skips every bucket whose beams all already hit something
-//! nearer than the bucket (occlusion culling by angular sectors). Same ranges as
+//! buckets first. A planar scan skips every bucket whose beams all already hit something
+//! nearer than the bucket, and every wall whose beams all already hit something no farther
+//! than the wall's bounding box (occlusion culling, beam by beam). Same ranges as
 //! [`Lidar::scan_into`] over all walls: culling only skips walls that cannot be seen.
 
 use rand::Rng;
 
-use super::lidar::{fast_atan2, seg_origin_distance, Lidar, Scan};
+use super::lidar::{fast_atan2, iceil, ifloor, seg_origin_distance, Lidar, Scan};
 use crate::error::Result;
 use crate::math::Real;
-use crate::world::{Pose2, Segment, SegmentIndex};
-
-/// Beams per occlusion sector.
-const SECTOR: usize = 16;
+use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
 #[derive(Debug, Clone, Default)]
@@ -22,8 +20,6 @@ pub(super) struct IndexedScratch {
     /// Per wall: the scan number in which it was swept.
     seen: Vec<u32>,
     epoch: u32,
-    /// Upper bound of the beam ranges in each sector.
-    sector_max: Vec<Real>,
     /// What the last scan did.
     stats: IndexedScanStats,
 }
@@ -35,8 +31,41 @@ pub struct IndexedScanStats {
     pub buckets: usize,
     /// Of those, skipped as occluded.
     pub buckets_occluded: usize,
-    /// Walls swept (facing the sensor, in range).
+    /// Walls read from those buckets (each once).
+    pub walls_visited: usize,
+    /// Walls swept (facing the sensor, in range, not occluded).
     pub walls_swept: usize,
+    /// Walls facing the sensor and in range but skipped as occluded (every beam of theirs
+    /// already hits something nearer).
+    pub walls_occluded: usize,
+}
+
+/// Whether none of the `count` ranges from column `j0` (modulo their number, a power of two)
+/// exceeds `d`.
+#[inline]
+fn none_beyond(ranges: &[Real], j0: i64, count: usize, d: Real) -> bool {
+    let n = ranges.len();
+    let i = (j0 & (n as i64 - 1)) as usize;
+    let beyond = |s: &[Real]| s.iter().fold(false, |acc, &r| acc | (r > d));
+    if i + count <= n {
+        !beyond(&ranges[i..i + count])
+    } else {
+        !beyond(&ranges[i..]) && !beyond(&ranges[..i + count - n])
+    }
+}
+
+/// [`none_beyond`] against a squared distance `d2`.
+#[inline]
+fn none_beyond_sq(ranges: &[Real], j0: i64, count: usize, d2: Real) -> bool {
+    let n = ranges.len();
+    let mut i = (j0 & (n as i64 - 1)) as usize;
+    for _ in 0..count {
+        if ranges[i] * ranges[i] > d2 {
+            return false;
+        }
+        i = (i + 1) & (n - 1);
+    }
+    true
 }
 
 impl Lidar {
@@ -96,22 +125,11 @@ impl Lidar {
             scratch.seen.iter_mut().for_each(|v| *v = 0);
             scratch.epoch = 1;
         }
-        let sectors = n / SECTOR;
-        scratch.sector_max.clear();
-        scratch.sector_max.resize(sectors, Real::INFINITY);
-        let refresh = |sm: &mut [Real], best: &[Real], k0: i64, k1: i64| {
-            for k in k0..=k1 {
-                let q = k.rem_euclid(sectors as i64) as usize;
-                sm[q] = best[q * SECTOR..(q + 1) * SECTOR].iter().copied().fold(0.0, Real::max);
-            }
-        };
-        if !extra.is_empty() && planar {
-            refresh(&mut scratch.sector_max, &out.ranges, 0, sectors as i64 - 1);
-        }
         let origin = index.origin();
         let ci = ((sp.x - origin[0]) / cell).floor() as i64;
         let cj = ((sp.y - origin[1]) / cell).floor() as i64;
         let inv_step = n as Real / std::f64::consts::TAU;
+        let max2 = c.max_range * c.max_range;
         let mut stats = IndexedScanStats::default();
         for &(di, dj) in &scratch.offsets {
             let (i, j) = (ci + di as i64, cj + dj as i64);
@@ -132,8 +150,8 @@ impl Lidar {
                 continue;
             }
             stats.buckets += 1;
-            // angular interval of the bucket, as sector indices (only away from the sensor)
-            let mut span: Option<(i64, i64)> = None;
+            // occlusion culling, away from the sensor: skip the bucket if every beam through
+            // it already hits something no farther than the bucket's nearest point
             if planar && dmin_b > 0.5 * cell {
                 let ctr = to_sensor([0.5 * (x0 + x1), 0.5 * (y0 + y1)]);
                 let tc = fast_atan2(ctr[1], ctr[0]);
@@ -149,15 +167,12 @@ impl Lidar {
                     lo = lo.min(d);
                     hi = hi.max(d);
                 }
-                let j0 = ((tc + lo) * inv_step).floor() as i64 - 1;
-                let j1 = ((tc + hi) * inv_step).ceil() as i64 + 1;
-                let (k0, k1) = (j0.div_euclid(SECTOR as i64), j1.div_euclid(SECTOR as i64));
-                let occluded = (k0..=k1).all(|k| scratch.sector_max[k.rem_euclid(sectors as i64) as usize] <= dmin_b);
-                if occluded {
+                let j0 = ifloor((tc + lo) * inv_step) - 1;
+                let j1 = iceil((tc + hi) * inv_step) + 1;
+                if none_beyond(&out.ranges, j0, ((j1 - j0 + 1) as usize).min(n), dmin_b) {
                     stats.buckets_occluded += 1;
                     continue;
                 }
-                span = Some((k0, k1));
             }
             for (&id, seg) in ids.iter().zip(index.bucket_walls(i as usize, j as usize)) {
                 let st = &mut scratch.seen[id as usize];
@@ -165,20 +180,38 @@ impl Lidar {
                     continue;
                 }
                 *st = scratch.epoch;
+                stats.walls_visited += 1;
                 if (planar && zs > seg.height) || !seg.faces([sp.x, sp.y]) {
                     continue;
                 }
+                // squared distance to the wall's bounding box: a lower bound of the wall's
+                // (exact for the axis-aligned walls of grid maps), without division or root
+                let bx = (seg.a[0].min(seg.b[0]) - sp.x).max(0.0).max(sp.x - seg.a[0].max(seg.b[0]));
+                let by = (seg.a[1].min(seg.b[1]) - sp.y).max(0.0).max(sp.y - seg.a[1].max(seg.b[1]));
+                let box2 = bx * bx + by * by;
+                if box2 > max2 {
+                    continue;
+                }
                 let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));
+                let cr = cross2(a, b);
+                if cr == 0.0 {
+                    let d = seg_origin_distance(a, b);
+                    if d <= c.max_range {
+                        stats.walls_swept += 1;
+                        self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
+                    }
+                    continue;
+                }
+                let (j0, count) = self.wall_beams(a, b, cr);
+                // a planar beam that already hits no farther than the wall's box cannot change
+                if planar && none_beyond_sq(&out.ranges, j0, count, box2) {
+                    stats.walls_occluded += 1;
+                    continue;
+                }
                 let d = seg_origin_distance(a, b);
                 if d <= c.max_range {
                     stats.walls_swept += 1;
-                    self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
-                }
-            }
-            if planar {
-                match span {
-                    Some((k0, k1)) => refresh(&mut scratch.sector_max, &out.ranges, k0, k1.min(k0 + sectors as i64 - 1)),
-                    None => refresh(&mut scratch.sector_max, &out.ranges, 0, sectors as i64 - 1),
+                    self.sweep(a, b, seg.height, j0, count, zs, d, &mut out.ranges);
                 }
             }
         }

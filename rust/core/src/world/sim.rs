@@ -207,10 +207,15 @@ impl World {
         let mut radius = CLEARANCE_SEARCH;
         loop {
             self.index.query_into([pose.x, pose.y], half_diagonal + radius, &mut self.near);
-            // the centre's distance less the half diagonal bounds the footprint's from below
+            // the centre's distance less the half diagonal bounds the footprint's from below, and
+            // the distance to the wall's bounding box bounds the centre's: walls whose box is
+            // at least `d + half_diagonal` away cannot be nearer (squared: no root, no hypot)
             let mut d = moving;
             for s in &self.near {
-                if s.distance_to_point([pose.x, pose.y]) - half_diagonal < d {
+                let bx = (s.a[0].min(s.b[0]) - pose.x).max(0.0).max(pose.x - s.a[0].max(s.b[0]));
+                let by = (s.a[1].min(s.b[1]) - pose.y).max(0.0).max(pose.y - s.a[1].max(s.b[1]));
+                let reach = d + half_diagonal;
+                if bx * bx + by * by < reach * reach {
                     d = d.min(footprint_segment_distance(&shape, pose, s));
                 }
             }
