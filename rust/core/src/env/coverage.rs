@@ -150,7 +150,7 @@ fn reachable(walls: &[Segment], start: Point2) -> Result<(OccupancyGrid, Vec<boo
     }
     let mut grid = OccupancyGrid::new(w, h, COVERAGE_GRID, origin, Cell::Free)?;
     grid.rasterize_segments(walls);
-    let mut seen = vec![false; w * h];
+    let mut seen = crate::world::recycle::take_bools(w * h, false);
     let Some((i0, j0)) = grid.world_to_cell(start) else {
         return Err(Error::invalid("start", "outside the site"));
     };
@@ -218,6 +218,7 @@ impl Coverage {
                 open(probe(1.0)) || open(probe(-1.0))
             })
             .collect();
+        crate::world::recycle::give_bools(seen);
         let (mut lo, mut hi) = (start, start);
         for p in &pieces {
             lo = [lo[0].min(p.mid[0]), lo[1].min(p.mid[1])];

@@ -35,6 +35,15 @@ pub struct OccupancyGrid {
     pub cells: Vec<Cell>,
 }
 
+impl Drop for OccupancyGrid {
+    /// Hands the cells to the thread's buffer pool for the next grid.
+    fn drop(&mut self) {
+        let mut cells = std::mem::ManuallyDrop::new(std::mem::take(&mut self.cells));
+        // SAFETY: `Cell` is `repr(u8)`: the buffer is a valid `Vec<u8>` of the same layout.
+        super::recycle::give(unsafe { Vec::from_raw_parts(cells.as_mut_ptr().cast::<u8>(), cells.len(), cells.capacity()) });
+    }
+}
+
 impl OccupancyGrid {
     /// A `width × height` grid filled with `fill`.
     pub fn new(width: usize, height: usize, resolution: Real, origin: Pose2, fill: Cell) -> Result<Self> {
@@ -45,7 +54,10 @@ impl OccupancyGrid {
             return Err(Error::invalid("resolution", format!("must be finite and > 0, got {resolution}")));
         }
         origin.validate("origin")?;
-        Ok(Self { width, height, resolution, origin, cells: vec![fill; width * height] })
+        let mut bytes = std::mem::ManuallyDrop::new(super::recycle::take(width * height, fill as u8));
+        // SAFETY: `Cell` is `repr(u8)` and every byte holds `fill`, a valid `Cell`.
+        let cells = unsafe { Vec::from_raw_parts(bytes.as_mut_ptr().cast::<Cell>(), bytes.len(), bytes.capacity()) };
+        Ok(Self { width, height, resolution, origin, cells })
     }
 
     /// The cell `(i, j)`.
@@ -74,8 +86,9 @@ impl OccupancyGrid {
     /// The cell containing world point `p`, if inside the grid.
     pub fn world_to_cell(&self, p: Point2) -> Option<(usize, usize)> {
         let q = self.origin.inverse_transform_point(p);
-        let (fi, fj) = ((q[0] / self.resolution).floor(), (q[1] / self.resolution).floor());
-        (fi >= 0.0 && fj >= 0.0 && fi < self.width as Real && fj < self.height as Real).then_some((fi as usize, fj as usize))
+        let (x, y) = (q[0] / self.resolution, q[1] / self.resolution);
+        // on [0, width) truncation is the floor (and no libm call); NaN fails every test
+        (x >= 0.0 && y >= 0.0 && x < self.width as Real && y < self.height as Real).then_some((x as usize, y as usize))
     }
 
     /// Sets every cell whose centre lies in the grid-frame box `[x0, x1] × [y0, y1]` (m).

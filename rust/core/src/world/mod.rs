@@ -12,6 +12,7 @@ mod index;
 mod map;
 mod moving;
 pub mod preset;
+pub(crate) mod recycle;
 pub mod rosmap;
 mod scenario;
 mod sim;
