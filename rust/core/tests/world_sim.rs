@@ -102,3 +102,33 @@ fn driving_into_the_cabinet_is_a_contact_judged_on_the_footprint() {
     }
     assert!(first_contact.is_some(), "never reached the cabinet");
 }
+
+/// `World::clearance` (an index search, then a kept set of walls while the robot moves
+/// within a budget) equals the brute-force minimum over every wall, step after step.
+#[test]
+fn clearance_equals_brute_force_along_trajectories() {
+    use shieldnav_core::world::generate::GeneratorConfig;
+    use shieldnav_core::world::RosMapOptions;
+    let map = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../envs/shieldnav/maps/mit_building31/building_31.yaml");
+    let worlds = vec![
+        World::from_preset("dynamic_obstacles", WorldConfig::default()).unwrap(),
+        World::from_procedural(3, &GeneratorConfig::default(), WorldConfig::default()).unwrap(),
+        World::from_ros_map(&map, &RosMapOptions::default(), WorldConfig::default()).unwrap(),
+    ];
+    for mut w in worlds {
+        let shape = w.config().robot;
+        let mut checked = 0;
+        for k in 0..1500 {
+            // sweep, turn and back off, so that the robot meets walls and rotates near them
+            let t = k as f64 * 0.02;
+            let cmd = [1.2 * (0.7 * t).cos(), 0.6 * (0.45 * t).sin(), 1.4 * (0.9 * t).sin()];
+            w.step(cmd).unwrap();
+            let pose = w.true_pose();
+            let brute = w.walls_now().iter().map(|s| footprint_segment_distance(&shape, pose, s)).fold(f64::INFINITY, f64::min);
+            let got = w.clearance();
+            assert!((got - brute).abs() < 1e-12, "{}: step {k}: clearance {got} vs brute force {brute}", w.scenario().name);
+            checked += (brute < 1.0) as usize;
+        }
+        assert!(checked > 50, "{}: the trajectory should come near walls ({checked} steps within 1 m)", w.scenario().name);
+    }
+}

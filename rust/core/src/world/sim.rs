@@ -16,7 +16,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::generate::{generate, GeneratorConfig};
-use super::geometry::{Pose2, Segment};
+use super::geometry::{wrap_angle, Point2, Pose2, Segment};
 use super::index::SegmentIndex;
 use super::preset::preset;
 use super::rosmap::{load_ros_map, RosMapOptions};
@@ -28,6 +28,8 @@ use crate::sensors::{Lidar, LidarConfig, Odometry, Scan};
 
 /// Distance (m) within which [`World::clearance`] first searches the wall index.
 pub const CLEARANCE_SEARCH: Real = 2.0;
+/// How far (m) footprint points may move before [`World::clearance`] searches the index again.
+pub const CLEARANCE_BUDGET: Real = 0.25;
 
 /// Everything about a world that is not the scenario.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,6 +87,12 @@ pub struct World {
     scan_body_pose: Pose2,
     index: SegmentIndex,
     near: Vec<Segment>,
+    /// Squared distances from the robot's centre to `near`.
+    near_c2: Vec<Real>,
+    /// The walls that can be the nearest while the robot stays within the clearance budget
+    /// of `clearance_anchor` (see [`World::clearance`]).
+    clearance_kept: Vec<Segment>,
+    clearance_anchor: Option<Pose2>,
     moving_now: Vec<Segment>,
     moving: Vec<Segment>,
     contacts: ContactReport,
@@ -116,6 +124,9 @@ impl World {
             scan_body_pose: Pose2::default(),
             index,
             near: Vec::new(),
+            near_c2: Vec::new(),
+            clearance_kept: Vec::new(),
+            clearance_anchor: None,
             moving_now: Vec::new(),
             moving: Vec::new(),
             contacts: ContactReport::default(),
@@ -190,13 +201,20 @@ impl World {
     }
 
     /// The true clearance (m): the distance from the robot's footprint to the nearest wall or
-    /// moving obstacle, 0 in contact. Exact: the wall index is searched within
-    /// [`CLEARANCE_SEARCH`] of the footprint, then within twice that, and so on, until a wall
-    /// lies inside the searched radius (or every wall has been measured).
+    /// moving obstacle, 0 in contact. Exact.
+    ///
+    /// Static walls: the wall index is searched within [`CLEARANCE_SEARCH`] of the footprint,
+    /// then within twice that, and so on, until a wall lies inside the searched radius (or
+    /// every wall has been measured). The walls that can become the nearest while the robot
+    /// moves by a budget `B` ([`CLEARANCE_BUDGET`]: translation plus half diagonal × rotation,
+    /// which bounds how far any footprint point moves) are kept: at most `d + 2B` away when
+    /// the search found `d`. Until the budget is spent only those are measured; any other
+    /// wall is then farther than `d + B`, and the kept nearest one nearer.
     pub fn clearance(&mut self) -> Real {
         let pose = self.physics.robot_pose();
         let shape = self.config.robot;
         let half_diagonal = 0.5 * shape.length.hypot(shape.width);
+        let inner = 0.5 * shape.length.min(shape.width);
         let moving = {
             self.moving_now.clear();
             for o in &self.scenario.obstacles {
@@ -204,23 +222,48 @@ impl World {
             }
             self.moving_now.iter().map(|s| footprint_segment_distance(&shape, pose, s)).fold(Real::INFINITY, Real::min)
         };
+        if let Some(anchor) = self.clearance_anchor {
+            let (dx, dy) = (pose.x - anchor.x, pose.y - anchor.y);
+            let moved = (dx * dx + dy * dy).sqrt() + half_diagonal * wrap_angle(pose.yaw - anchor.yaw).abs();
+            if moved <= CLEARANCE_BUDGET {
+                let walls = self.clearance_kept.iter().map(|s| footprint_segment_distance(&shape, pose, s));
+                return walls.fold(moving, Real::min);
+            }
+        }
+        let centre = [pose.x, pose.y];
         let mut radius = CLEARANCE_SEARCH;
         loop {
-            self.index.query_into([pose.x, pose.y], half_diagonal + radius, &mut self.near);
-            // the centre's distance less the half diagonal bounds the footprint's from below, and
-            // the distance to the wall's bounding box bounds the centre's: walls whose box is
-            // at least `d + half_diagonal` away cannot be nearer (squared: no root, no hypot)
-            let mut d = moving;
+            // walls up to `2B` beyond the answer are kept, so the query reaches that far too
+            self.index.query_into(centre, half_diagonal + radius + 2.0 * CLEARANCE_BUDGET, &mut self.near);
+            // The footprint holds the disc of radius `inner` about the centre and lies inside
+            // the one of radius `half_diagonal`; with `c` the centre's distance to a wall, the
+            // footprint's is in [c − half_diagonal, c − inner]. So the nearest centre distance
+            // bounds the answer from above, and only walls whose centre distance is below that
+            // bound plus `half_diagonal − inner` need the exact footprint test (squared: no root).
+            let mut c2_min = Real::INFINITY;
+            self.near_c2.clear();
             for s in &self.near {
-                let bx = (s.a[0].min(s.b[0]) - pose.x).max(0.0).max(pose.x - s.a[0].max(s.b[0]));
-                let by = (s.a[1].min(s.b[1]) - pose.y).max(0.0).max(pose.y - s.a[1].max(s.b[1]));
-                let reach = d + half_diagonal;
-                if bx * bx + by * by < reach * reach {
+                let c2 = segment_distance2(s, centre);
+                c2_min = c2_min.min(c2);
+                self.near_c2.push(c2);
+            }
+            let limit = c2_min.sqrt() - inner + half_diagonal;
+            let mut d = Real::INFINITY;
+            for (s, &c2) in self.near.iter().zip(&self.near_c2) {
+                if c2 < limit * limit {
                     d = d.min(footprint_segment_distance(&shape, pose, s));
                 }
             }
-            if d <= radius || self.near.len() == self.index.segments().len() {
-                return d;
+            let everything = self.near.len() == self.index.segments().len();
+            if d <= radius || everything {
+                // keep every wall that may lie within `d + 2B` of the footprint
+                let keep = d + 2.0 * CLEARANCE_BUDGET + half_diagonal;
+                self.clearance_kept.clear();
+                self.clearance_kept.extend(self.near.iter().zip(&self.near_c2).filter(|(_, &c2)| c2 < keep * keep).map(|(s, _)| *s));
+                // exact while searched: `near` holds every wall within `half_diagonal + radius
+                // + 2B ≥ keep` of the centre (or every wall)
+                self.clearance_anchor = Some(pose);
+                return d.min(moving);
             }
             radius *= 2.0;
         }
@@ -265,3 +308,15 @@ impl World {
         v
     }
 }
+
+/// Squared distance from `p` to the segment `s`.
+#[inline]
+fn segment_distance2(s: &Segment, p: Point2) -> Real {
+    let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
+    let (wx, wy) = (p[0] - s.a[0], p[1] - s.a[1]);
+    let l2 = ex * ex + ey * ey;
+    let t = if l2 > 0.0 { ((wx * ex + wy * ey) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    let (dx, dy) = (wx - t * ex, wy - t * ey);
+    dx * dx + dy * dy
+}
+
