@@ -221,10 +221,9 @@ pub struct Episode {
     coverage: Coverage,
     deadlock: DeadlockMonitor,
     cos_el: Vec<Real>,
-    /// Valid returns of the latest scan in the current body frame, `[x, y, z]` rows.
-    /// Scan indices of the valid returns that can lie inside the shield's crop radius until
-    /// the next scan (range at most `crop + near_margin`).
-    near_ids: Vec<u32>,
+    /// The valid returns of the latest scan (its body frame) that can lie inside the shield's
+    /// crop radius until the next scan (range at most `crop + near_margin`).
+    near: Vec<[Real; 3]>,
     near_margin: Real,
     /// Those returns moved into the current body frame, `[x, y, z]` rows, for the shield.
     shield_points: Vec<f32>,
@@ -318,7 +317,7 @@ impl Episode {
             coverage,
             deadlock,
             cos_el,
-            near_ids: Vec::new(),
+            near: Vec::new(),
             near_margin: 0.0,
             shield_points: Vec::new(),
             bins: Vec::new(),
@@ -429,12 +428,8 @@ impl Episode {
     fn select_near(&mut self) {
         let scan = self.world.scan();
         let limit = self.config.shield.scan.crop_radius.map_or(Real::INFINITY, |c| c + self.near_margin);
-        self.near_ids.clear();
-        for (k, (p, r)) in scan.points.iter().zip(&scan.ranges).enumerate() {
-            if !p[0].is_nan() && *r <= limit {
-                self.near_ids.push(k as u32);
-            }
-        }
+        self.near.clear();
+        self.near.extend(scan.points.iter().zip(&scan.ranges).filter(|(p, r)| !p[0].is_nan() && **r <= limit).map(|(p, _)| *p));
     }
 
     /// Moves the returns the shield may need into the current body frame (`f32` rows).
@@ -446,11 +441,11 @@ impl Episode {
             self.select_near();
         }
         let (s, c) = rel.yaw.sin_cos();
-        let pts = &self.world.scan().points;
-        self.shield_points.clear();
-        for &k in &self.near_ids {
-            let p = pts[k as usize];
-            self.shield_points.extend_from_slice(&[(rel.x + c * p[0] - s * p[1]) as f32, (rel.y + s * p[0] + c * p[1]) as f32, p[2] as f32]);
+        self.shield_points.resize(3 * self.near.len(), 0.0);
+        for (o, p) in self.shield_points.chunks_exact_mut(3).zip(&self.near) {
+            o[0] = (rel.x + c * p[0] - s * p[1]) as f32;
+            o[1] = (rel.y + s * p[0] + c * p[1]) as f32;
+            o[2] = p[2] as f32;
         }
     }
 
