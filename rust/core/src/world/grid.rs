@@ -245,14 +245,32 @@ impl OccupancyGrid {
     /// cell, so no cell a segment crosses is skipped by more than a corner).
     pub fn rasterize_segments(&mut self, segments: &[Segment]) {
         for s in segments {
-            let len = s.length();
-            let n = (len / (0.25 * self.resolution)).ceil().max(1.0) as usize;
-            for k in 0..=n {
-                let t = k as Real / n as Real;
-                let p = [s.a[0] + t * (s.b[0] - s.a[0]), s.a[1] + t * (s.b[1] - s.a[1])];
-                if let Some((i, j)) = self.world_to_cell(p) {
-                    self.set(i, j, Cell::Occupied);
+            // an axis-aligned wall in an unrotated grid covers one row (column) of cells from
+            // its first sample's cell to its last's: the samples below step < one cell, so
+            // they hit exactly those (the last sample is `a + 1 (b − a)`, as below)
+            if self.origin.yaw == 0.0 && (s.a[0] == s.b[0] || s.a[1] == s.b[1]) {
+                let end = [s.a[0] + (s.b[0] - s.a[0]), s.a[1] + (s.b[1] - s.a[1])];
+                if let (Some((i0, j0)), Some((i1, j1))) = (self.world_to_cell(s.a), self.world_to_cell(end)) {
+                    for j in j0.min(j1)..=j0.max(j1) {
+                        let row = j * self.width;
+                        self.cells[row + i0.min(i1)..=row + i0.max(i1)].fill(Cell::Occupied);
+                    }
+                    continue;
                 }
+            }
+            self.rasterize_sampled(s);
+        }
+    }
+
+    /// Marks the cells of samples a quarter cell apart along `s`, both ends included.
+    fn rasterize_sampled(&mut self, s: &Segment) {
+        let len = s.length();
+        let n = (len / (0.25 * self.resolution)).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let t = k as Real / n as Real;
+            let p = [s.a[0] + t * (s.b[0] - s.a[0]), s.a[1] + t * (s.b[1] - s.a[1])];
+            if let Some((i, j)) = self.world_to_cell(p) {
+                self.set(i, j, Cell::Occupied);
             }
         }
     }
@@ -299,6 +317,28 @@ fn edt_1d(f: &[Real], d: &mut [Real], v: &mut [usize], z: &mut [Real]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn axis_aligned_walls_rasterize_exactly_as_sampled() {
+        // ends on cell edges, inside cells, reversed, zero-length and leaving the grid
+        let walls: Vec<Segment> = (0..400)
+            .map(|k| {
+                let f = |m: usize| ((k * m) % 97) as Real * 0.0371 - 0.3;
+                let (x, y, l) = (f(7), f(13), f(29) - 1.0);
+                if k % 2 == 0 { Segment::new([x, y], [x + l, y], 1.0) } else { Segment::new([x, y], [x, y + l * 0.05 / 0.05], 1.0) }
+            })
+            .chain([Segment::new([0.5, 0.5], [2.0, 0.5], 1.0), Segment::new([1.0, 0.25], [1.0, 3.0], 1.0), Segment::new([-1.0, 1.0], [1.0, 1.0], 1.0)])
+            .collect();
+        let origin = Pose2::new(-0.1, -0.2, 0.0);
+        let mut fast = OccupancyGrid::new(80, 90, 0.05, origin, Cell::Free).unwrap();
+        fast.rasterize_segments(&walls);
+        let mut sampled = OccupancyGrid::new(80, 90, 0.05, origin, Cell::Free).unwrap();
+        for w in &walls {
+            sampled.rasterize_sampled(w);
+        }
+        assert!(fast.cells.iter().filter(|c| **c == Cell::Occupied).count() > 500);
+        assert_eq!(fast.cells, sampled.cells);
+    }
 
     #[test]
     fn single_occupied_block_gives_its_outline() {
