@@ -1,0 +1,177 @@
+"""The ``shieldnav`` command line.
+
+    shieldnav info                                   # version, SIMD level, ids and time limits
+    shieldnav render shieldnav/MapInspection-v0 --set map_path=my_map.yaml --out site.png
+    shieldnav run shieldnav/ConstrictedPassage-v0 --policy scripted --gif run.gif
+    shieldnav filter scan.npy --u-nom 1.0 0.2        # the shield on a saved scan (N×2 or N×3)
+
+``--set key=value`` passes any environment keyword (``shieldnav.ENV_DEFAULTS``); values are
+read as JSON when they parse (numbers, lists, true/false/null), else as strings. Errors name
+what was wrong and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from shieldnav.exceptions import ShieldnavError
+
+POLICIES = ("zero", "random", "scripted")
+
+
+def _settings(pairs: Sequence[str]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for pair in pairs:
+        key, sep, raw = pair.partition("=")
+        if not sep or not key:
+            raise ValueError(f"invalid `--set`: expected key=value, got {pair!r}")
+        try:
+            out[key] = json.loads(raw)
+        except json.JSONDecodeError:
+            out[key] = raw
+    return out
+
+
+def _make(env_id: str, settings: dict[str, Any], render: bool, shield: str | None = None) -> Any:
+    import gymnasium as gym
+
+    from shieldnav.registration import ENV_IDS
+
+    if env_id not in ENV_IDS:
+        raise ValueError(f"invalid environment id {env_id!r}: known ids are {', '.join(sorted(ENV_IDS))}")
+    kwargs = dict(settings)
+    if shield is not None:
+        kwargs["shield"] = shield
+    return gym.make(env_id, render_mode="rgb_array" if render else None, **kwargs)
+
+
+def cmd_info(_: argparse.Namespace) -> None:
+    from shieldnav import SHIELD_DEFAULTS, Shield, __version__
+    from shieldnav.registration import ENV_IDS
+
+    print(f"shieldnav {__version__}  (shield kernel: {Shield().simd_level})")
+    print("\nenvironments (time limit at 50 Hz):")
+    for env_id, (_, steps) in sorted(ENV_IDS.items()):
+        print(f"  {env_id:36s} {steps:5d} steps ({steps * 0.02:g} s)")
+    print("\nshield defaults (the paper's):")
+    for key, value in SHIELD_DEFAULTS.items():
+        print(f"  {key:16s} {value}")
+
+
+def cmd_render(args: argparse.Namespace) -> None:
+    from PIL import Image
+
+    env = _make(args.env_id, _settings(args.set), render=True)
+    env.reset(seed=args.seed)
+    frame = env.render()
+    env.close()
+    Image.fromarray(frame).save(args.out)
+    print(f"wrote {args.out} ({frame.shape[1]}×{frame.shape[0]})")
+
+
+def cmd_run(args: argparse.Namespace) -> None:
+    env = _make(args.env_id, _settings(args.set), render=args.gif is not None, shield=args.shield)
+    obs, info = env.reset(seed=args.seed)
+    rng = np.random.default_rng(args.seed)
+    agent = None
+    if args.policy == "scripted":
+        try:
+            from agents.scripted import InspectionAgent
+        except ImportError as err:
+            raise ValueError("invalid `--policy scripted`: the scripted agent lives in the repository's agents/ folder; run from the repository root") from err
+        agent = InspectionAgent(env)
+        agent.reset()
+    frames = []
+    steps = 0
+    while True:
+        if agent is not None:
+            action = agent.act(obs, info)
+        elif args.policy == "random":
+            action = rng.uniform(-1.0, 1.0, 3).astype(np.float32)
+        else:
+            action = np.zeros(3, dtype=np.float32)
+        obs, _, terminated, truncated, info = env.step(action)
+        steps += 1
+        if args.gif is not None and steps % 5 == 1:
+            frames.append(env.render())
+        if terminated or truncated or (args.steps is not None and steps >= args.steps):
+            break
+    summary = env.unwrapped.episode.summary()
+    env.close()
+    if args.gif is not None:
+        from shieldnav.rendering import save_video
+
+        save_video(frames, args.gif, fps=10)
+    clean = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in summary.items()}
+    print(json.dumps(clean, indent=1))
+    if args.gif is not None:
+        print(f"wrote {args.gif} ({len(frames)} frames)", file=sys.stderr)
+
+
+def cmd_filter(args: argparse.Namespace) -> None:
+    from shieldnav import Shield
+
+    path = Path(args.points)
+    if not path.is_file():
+        raise ValueError(f"invalid `points`: {path} is not a file")
+    points = np.load(path) if path.suffix == ".npy" else np.loadtxt(path, delimiter=",", ndmin=2)
+    points = np.ascontiguousarray(points)
+    kwargs: dict[str, Any] = {"method": args.method}
+    if args.semi_axes is not None:
+        kwargs["semi_axes"] = tuple(args.semi_axes)
+    out = Shield(**kwargs).filter(points, np.asarray(args.u_nom, dtype=np.float64), yaw=args.yaw, omega=args.omega)
+    print(json.dumps({
+        "u": [float(v) for v in out.u], "H": out.H, "h_min": out.h_min if math.isfinite(out.h_min) and out.h_min < 1e300 else None,
+        "active": out.active, "feasible": out.feasible, "num_points": out.num_points, "solve_time_us": out.solve_time_ns / 1e3,
+    }, indent=1))
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="shieldnav", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="command", required=True)
+    sub.add_parser("info", help="version, SIMD level, environment ids, shield defaults").set_defaults(func=cmd_info)
+    r = sub.add_parser("render", help="save the top-down picture of an environment after reset")
+    r.add_argument("env_id")
+    r.add_argument("--seed", type=int, default=0)
+    r.add_argument("--out", default="shieldnav.png")
+    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="an environment keyword")
+    r.set_defaults(func=cmd_render)
+    u = sub.add_parser("run", help="run one episode and print its summary")
+    u.add_argument("env_id")
+    u.add_argument("--policy", choices=POLICIES, default="zero")
+    u.add_argument("--shield", default=None, help="composite, distance, hardmin or none (default: the env's)")
+    u.add_argument("--seed", type=int, default=0)
+    u.add_argument("--steps", type=int, default=None, help="stop after this many steps")
+    u.add_argument("--gif", default=None, help="write a GIF of the episode (every 5th step)")
+    u.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="an environment keyword")
+    u.set_defaults(func=cmd_run)
+    f = sub.add_parser("filter", help="the shield on a saved scan (.npy or .csv, N×2 or N×3, body frame)")
+    f.add_argument("points")
+    f.add_argument("--u-nom", type=float, nargs=2, required=True, metavar=("VX", "VY"))
+    f.add_argument("--yaw", type=float, default=0.0)
+    f.add_argument("--omega", type=float, default=0.0)
+    f.add_argument("--semi-axes", type=float, nargs="+", default=None)
+    f.add_argument("--method", default="composite", choices=["composite", "distance", "hardmin", "none"])
+    f.set_defaults(func=cmd_filter)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        args.func(args)
+    except (ValueError, ShieldnavError, OSError) as err:
+        print(f"shieldnav: error: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
