@@ -171,6 +171,14 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         if !grid.rect_is(rect[0], rect[1], rect[2], rect[3], Cell::Free) {
             continue;
         }
+        // a piece narrows its corridor but leaves a footprint's width (`need`) to every door,
+        // junction and other piece: otherwise it would block a way and the repair below
+        // (one more reachability search per attempt) would have to take it out again
+        let near = |o: &[Real; 4]| rect[0] - need < o[2] && o[0] < rect[2] + need && rect[1] - need < o[3] && o[1] < rect[3] + need;
+        let pad_rects = pads.iter().map(|p| [p.x0, p.y0, p.x1, p.y1]);
+        if rooms.iter().map(|r| r.door).chain(pad_rects).any(|o| near(&o)) || furniture.iter().any(|(o, _, _)| near(o)) {
+            continue;
+        }
         let cells = cells_in(&grid, rect);
         for &(i, j) in &cells {
             grid.set(i, j, Cell::Occupied);
