@@ -146,11 +146,18 @@ impl Segment {
     /// Distance from `p` to the closest point of the segment (m).
     #[inline]
     pub fn distance_to_point(&self, p: Point2) -> Real {
+        self.distance2_to_point(p).sqrt()
+    }
+
+    /// Squared distance from `p` to the closest point of the segment (m²).
+    #[inline]
+    pub fn distance2_to_point(&self, p: Point2) -> Real {
         let e = sub2(self.b, self.a);
         let w = sub2(p, self.a);
         let l2 = e[0] * e[0] + e[1] * e[1];
         let t = if l2 > 0.0 { ((w[0] * e[0] + w[1] * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
-        norm2([w[0] - t * e[0], w[1] - t * e[1]])
+        let (dx, dy) = (w[0] - t * e[0], w[1] - t * e[1]);
+        dx * dx + dy * dy
     }
 
     /// Checks finiteness, a positive height and distinct end points.

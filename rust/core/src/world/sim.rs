@@ -16,7 +16,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::generate::{generate, GeneratorConfig};
-use super::geometry::{wrap_angle, Point2, Pose2, Segment};
+use super::geometry::{wrap_angle, Pose2, Segment};
 use super::index::SegmentIndex;
 use super::preset::preset;
 use super::rosmap::{load_ros_map, RosMapOptions};
@@ -243,7 +243,7 @@ impl World {
             let mut c2_min = Real::INFINITY;
             self.near_c2.clear();
             for s in &self.near {
-                let c2 = segment_distance2(s, centre);
+                let c2 = s.distance2_to_point(centre);
                 c2_min = c2_min.min(c2);
                 self.near_c2.push(c2);
             }
@@ -308,15 +308,3 @@ impl World {
         v
     }
 }
-
-/// Squared distance from `p` to the segment `s`.
-#[inline]
-fn segment_distance2(s: &Segment, p: Point2) -> Real {
-    let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
-    let (wx, wy) = (p[0] - s.a[0], p[1] - s.a[1]);
-    let l2 = ex * ex + ey * ey;
-    let t = if l2 > 0.0 { ((wx * ex + wy * ey) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    let (dx, dy) = (wx - t * ex, wy - t * ey);
-    dx * dx + dy * dy
-}
-
