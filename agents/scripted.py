@@ -37,7 +37,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from shieldnav import NominalController, ViewPlanner
+from shieldnav import NominalController, Shield, ViewPlanner
 from shieldnav.env import CorridorInspectionEnv
 from shieldnav.exceptions import InvalidArgumentError
 
@@ -128,10 +128,9 @@ class InspectionAgent:
         self._fit = fit_reference
         self._stall_steps = None if stall_time is None else max(1, round(stall_time / c["dt"]))
         self._reach_threshold = float(c["reach_threshold"])
-        self._axes = np.asarray(c["semi_axes"][:2], dtype=np.float64)
         self._half_width = 0.5 * float(c["robot_width"])
-        self._gamma, self._kappa = float(c["gamma"]), float(c["kappa"])
-        self._crop = math.inf if c["crop_radius"] is None else float(c["crop_radius"])
+        # the env's composite barrier, to judge where the robot can stand
+        self._shield = Shield(semi_axes=tuple(c["semi_axes"][:2]), gamma=c["gamma"], kappa=c["kappa"], crop_radius=c["crop_radius"], height_band=None)
         self._fit_margin = float(fit_margin)
         self._held: tuple[np.ndarray, float] | None = None
         self._side: np.ndarray | None = None
@@ -229,22 +228,18 @@ class InspectionAgent:
             return along, goal_yaw
         offsets = offsets[np.argsort(np.abs(offsets - d_insp), kind="stable")]
         centres = along[None, :] + offsets[:, None] * view
-        rel = world[None, :, :] - centres[:, None, :]
-        near = np.einsum("kij,kij->ki", rel, rel) <= self._crop**2
         best = (-math.inf, centres[0], goal_yaw)
+        zero = np.zeros(2)
         for turn in _TURNS:
             yaw = goal_yaw + turn
-            c, s = math.cos(yaw), math.sin(yaw)
-            body = rel @ np.array([[c, -s], [s, c]]) / self._axes
-            h = np.einsum("kij,kij->ki", body, body) - 1.0
-            terms = np.where(near, np.exp(-self._kappa * np.tanh(h / self._gamma)), 0.0).sum(axis=1)
-            barrier = -(self._gamma / self._kappa) * np.log(np.maximum(terms, 1e-300))
-            ok = np.flatnonzero(barrier >= self._fit_margin)
-            if len(ok):
-                return centres[ok[0]], yaw
-            k = int(np.argmax(barrier))
-            if barrier[k] > best[0]:
-                best = (float(barrier[k]), centres[k], yaw)
+            rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+            for centre in centres:
+                body = np.ascontiguousarray((world - centre) @ rot)
+                barrier = self._shield.filter(body, zero, yaw=0.0, omega=0.0).H
+                if barrier >= self._fit_margin:
+                    return centre, yaw
+                if barrier > best[0]:
+                    best = (barrier, centre, yaw)
         return best[1], best[2]
 
     def act(self, obs: Any, info: dict[str, Any] | None = None) -> np.ndarray:

@@ -113,8 +113,9 @@ def conservatism(kappas: tuple[float, ...] = (2, 4, 8, 16, 32), counts: tuple[in
     """``H`` of the Rust composite shield for a 2 m corridor scanned with N points (robot on
     the centre line, facing along it), per κ; with the soft-min bounds
     ``γ tanh(h_min/γ) − (γ/κ) ln N ≤ H ≤ γ tanh(h_min/γ)``."""
-    from shieldnav import Shield
+    from shieldnav import SHIELD_DEFAULTS, Shield
 
+    gamma = float(SHIELD_DEFAULTS["gamma"])
     rows = []
     for n in counts:
         # N points evenly along both walls (y = ±1 m) within the 3.5 m crop
@@ -122,9 +123,8 @@ def conservatism(kappas: tuple[float, ...] = (2, 4, 8, 16, 32), counts: tuple[in
         pts = np.concatenate([np.stack([x, np.full_like(x, s)], 1) for s in (-1.0, 1.0)])
         for kappa in kappas:
             out = Shield(kappa=kappa).filter(pts, np.zeros(2), yaw=0.0, omega=0.0)
-            gamma = 0.9
             top = gamma * math.tanh(out.h_min / gamma)
-            rows.append({"kappa": kappa, "points": int(out.num_points), "H": out.H, "h_min": out.h_min,
+            rows.append({"kappa": kappa, "gamma": gamma, "points": int(out.num_points), "H": out.H, "h_min": out.h_min,
                          "upper": top, "lower": top - gamma / kappa * math.log(out.num_points)})
     return rows
 
@@ -145,7 +145,7 @@ def plot(rows: list[dict[str, Any]], cons: list[dict[str, Any]], out: Path) -> l
             line = ax[0].plot(n, [r["H"] for r in rs], "o-", ms=3, label=f"κ={kappa:g}")[0]
             ax[0].plot(n, [r["lower"] for r in rs], ":", color=line.get_color())
             ax[1].plot(n, [r["upper"] - r["H"] for r in rs], "o-", ms=3, color=line.get_color(), label=f"κ={kappa:g}")
-            ax[1].plot(n, [0.9 / kappa * math.log(r["points"]) for r in rs], ":", color=line.get_color())
+            ax[1].plot(n, [r["gamma"] / kappa * math.log(r["points"]) for r in rs], ":", color=line.get_color())
         ax[0].axhline(0, color="k", lw=0.6)
         ax[0].set(xscale="log", xlabel="points N", ylabel="H", title="composite H, robot centred in a 2 m corridor (dotted: lower bound)")
         ax[1].set(xscale="log", xlabel="points N", ylabel="γ tanh(h_min/γ) − H",
