@@ -16,6 +16,7 @@
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::sensors::Scan;
+use crate::world::region::FreeRegion;
 use crate::world::{Cell, OccupancyGrid, Point2, Pose2, Segment};
 
 /// Cell of the reachability raster (m).
@@ -129,8 +130,8 @@ fn cut(walls: &[Segment], piece_length: Real) -> Vec<Piece> {
     out
 }
 
-/// Cells of the free space connected to `start` in a raster of `walls` (4-connected).
-fn reachable(walls: &[Segment], start: Point2) -> Result<(OccupancyGrid, Vec<bool>)> {
+/// The free space connected to `start` (4-connected) in a raster of `walls`, and the raster.
+fn reachable(walls: &[Segment], start: Point2) -> Result<(OccupancyGrid, FreeRegion)> {
     let (mut lo, mut hi) = (start, start);
     for w in walls {
         for p in [w.a, w.b] {
@@ -150,7 +151,6 @@ fn reachable(walls: &[Segment], start: Point2) -> Result<(OccupancyGrid, Vec<boo
     }
     let mut grid = OccupancyGrid::new(w, h, COVERAGE_GRID, origin, Cell::Free)?;
     grid.rasterize_segments(walls);
-    let mut seen = crate::world::recycle::take_bools(w * h, false);
     let Some((i0, j0)) = grid.world_to_cell(start) else {
         return Err(Error::invalid("start", "outside the site"));
     };
@@ -160,50 +160,16 @@ fn reachable(walls: &[Segment], start: Point2) -> Result<(OccupancyGrid, Vec<boo
             format!("lies on a wall at ({:.3}, {:.3})", start[0], start[1]),
         ));
     }
-    // scanline fill: each popped seed fills its whole free run, then seeds the rows above
-    // and below once per free run they touch
-    let free = |c: usize| grid.cells[c] == Cell::Free;
-    let mut stack = vec![(i0, j0)];
-    while let Some((i, j)) = stack.pop() {
-        let row = j * w;
-        if seen[row + i] {
-            continue;
-        }
-        let (mut a, mut b) = (i, i);
-        while a > 0 && free(row + a - 1) && !seen[row + a - 1] {
-            a -= 1;
-        }
-        while b + 1 < w && free(row + b + 1) && !seen[row + b + 1] {
-            b += 1;
-        }
-        seen[row + a..=row + b].iter_mut().for_each(|v| *v = true);
-        for nj in [j.wrapping_sub(1), j + 1] {
-            if nj >= h {
-                continue;
-            }
-            let nrow = nj * w;
-            let mut in_run = false;
-            for x in a..=b {
-                let open = free(nrow + x) && !seen[nrow + x];
-                if open && !in_run {
-                    stack.push((x, nj));
-                }
-                in_run = open;
-            }
-        }
-    }
-    Ok((grid, seen))
+    let region = FreeRegion::new(&grid, (i0, j0));
+    Ok((grid, region))
 }
 
 impl Coverage {
     /// Cuts `walls` into pieces and keeps those facing the free space reachable from `start`.
     pub fn new(walls: &[Segment], start: Point2, config: &CoverageConfig) -> Result<Self> {
         config.validate()?;
-        let (grid, seen) = reachable(walls, start)?;
-        let open = |p: Point2| {
-            grid.world_to_cell(p)
-                .is_some_and(|(i, j)| seen[j * grid.width + i])
-        };
+        let (grid, region) = reachable(walls, start)?;
+        let open = |p: Point2| grid.world_to_cell(p).is_some_and(|(i, j)| region.contains(i, j));
         let pieces: Vec<Piece> = cut(walls, config.piece_length)
             .into_iter()
             .filter(|p| {
@@ -218,7 +184,6 @@ impl Coverage {
                 open(probe(1.0)) || open(probe(-1.0))
             })
             .collect();
-        crate::world::recycle::give_bools(seen);
         let (mut lo, mut hi) = (start, start);
         for p in &pieces {
             lo = [lo[0].min(p.mid[0]), lo[1].min(p.mid[1])];

@@ -13,29 +13,48 @@ pub(crate) fn words_for(cells: usize) -> usize {
 }
 
 /// Eight cells as the bytes of a word, cell 0 in the lowest byte.
+#[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
 pub(crate) fn cell_bytes(c: &[Cell]) -> u64 {
     u64::from_le_bytes(std::array::from_fn(|i| c[i] as u8))
 }
 
+/// Bit `i` set iff cell `i` of the 64 cells `c` equals `v`.
+#[inline(always)]
+fn equal_bits(c: &[Cell], v: u8) -> u64 {
+    debug_assert_eq!(c.len(), 64);
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__m128i, _mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_set1_epi8};
+        // SAFETY: SSE2 is part of the x86_64 baseline; `c` holds 64 bytes (`Cell` is a u8),
+        // read as four unaligned 16-byte loads.
+        unsafe {
+            let p = c.as_ptr().cast::<__m128i>();
+            let t = _mm_set1_epi8(v as i8);
+            let m = |k: usize| _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(p.add(k)), t)) as u16 as u64;
+            m(0) | m(1) << 16 | m(2) << 32 | m(3) << 48
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        const LOW: u64 = 0x0101_0101_0101_0101;
+        const HIGH: u64 = 0x8080_8080_8080_8080;
+        c.chunks_exact(8).enumerate().fold(0, |m, (b, c)| {
+            // the high bit of each byte equal to `v`, gathered into 8 bits
+            let y = cell_bytes(c) ^ (v as u64 * LOW);
+            let hit = !(((y & !HIGH) + !HIGH) | y) & HIGH;
+            m | ((hit >> 7).wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * b)
+        })
+    }
+}
+
 /// Packs the cells of `row` whose value is selected into `out`: cell `c` gives 1 iff
 /// `select[c as usize]`.
 pub(crate) fn pack_cells(row: &[Cell], select: [bool; 3], out: &mut [u64]) {
-    const LOW: u64 = 0x0101_0101_0101_0101;
-    const HIGH: u64 = 0x8080_8080_8080_8080;
     for (k, w) in out.iter_mut().enumerate() {
         let chunk = &row[k * 64..row.len().min((k + 1) * 64)];
         *w = if chunk.len() == 64 {
-            chunk.chunks_exact(8).enumerate().fold(0, |m, (b, c)| {
-                // the high bit of each byte equal to a selected value, gathered into 8 bits
-                let x = cell_bytes(c);
-                let mut hit = 0;
-                for (v, _) in select.iter().enumerate().filter(|(_, s)| **s) {
-                    let y = x ^ (v as u64 * LOW);
-                    hit |= !(((y & !HIGH) + !HIGH) | y) & HIGH;
-                }
-                m | ((hit >> 7).wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * b)
-            })
+            (0..3u8).filter(|&v| select[v as usize]).fold(0, |m, v| m | equal_bits(chunk, v))
         } else {
             chunk.iter().enumerate().fold(0, |m, (b, c)| m | (select[*c as usize] as u64) << b)
         };

@@ -8,9 +8,12 @@
 //!
 //! Every site is checked, not assumed, traversable: the footprint search of
 //! [`super::traverse`] must reach every waypoint (corridor ends, room centres, goal) from the
-//! start. A room the search cannot reach even without furniture is walled up again; the
-//! pieces of furniture next to what they cut off are removed (and, should that not be enough,
-//! the fewest pieces, last placed first). The verdict always comes from a search of the grid
+//! start. Two cheap predictions keep that to one search for almost every site: a room behind
+//! a doorway narrower than the footprint is long is opened only if a search of a small window
+//! around the doorway gets the footprint in, and furniture keeps a footprint's length more
+//! from doorways (room to turn in). A room the site-wide search cannot reach even without
+//! furniture is walled up again; the pieces of furniture next to what they cut off are
+//! removed (and, should that not be enough, the fewest pieces, last placed first). The verdict always comes from a search of the grid
 //! as finally left, and the grid is exactly the map: walls are its cell edges and each
 //! furniture box is drawn as the cells it fills (details in `generate/repair.rs`).
 //!
@@ -28,7 +31,7 @@ use super::geometry::{Point2, Polygon, Pose2};
 use super::grid::{Cell, OccupancyGrid};
 use super::map::StaticMap;
 use super::scenario::Scenario;
-use super::traverse::Footprint;
+use super::traverse::{footprint_reachability, Footprint};
 use crate::error::{Error, Result};
 use crate::math::Real;
 
@@ -136,7 +139,7 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     for c in corridors.iter().chain(pads.iter()) {
         grid.fill_rect(c.x0, c.y0, c.x1, c.y1, Cell::Free);
     }
-    let rooms = carve_rooms(&mut rng, &mut grid, &corridors, cfg.kind);
+    let (rooms, sealed) = carve_rooms(&mut rng, &mut grid, &corridors, cfg);
     let main = corridors[0];
     let yc = 0.5 * (main.y0 + main.y1);
     let start = Pose2::new(main.x0 + END_INSET, yc, 0.0);
@@ -171,12 +174,14 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         if !grid.rect_is(rect[0], rect[1], rect[2], rect[3], Cell::Free) {
             continue;
         }
-        // a piece narrows its corridor but leaves a footprint's width (`need`) to every door,
-        // junction and other piece: otherwise it would block a way and the repair below
-        // (one more reachability search per attempt) would have to take it out again
-        let near = |o: &[Real; 4]| rect[0] - need < o[2] && o[0] < rect[2] + need && rect[1] - need < o[3] && o[1] < rect[3] + need;
+        // a piece narrows its corridor but leaves a footprint's width (`need`) to every
+        // junction and other piece, and room to turn (`need` plus the footprint's length) to
+        // every doorway: otherwise it would block a way and the repair below (one more
+        // site-wide search per attempt) would have to take it out again
+        let near = |o: &[Real; 4], need: Real| rect[0] - need < o[2] && o[0] < rect[2] + need && rect[1] - need < o[3] && o[1] < rect[3] + need;
         let pad_rects = pads.iter().map(|p| [p.x0, p.y0, p.x1, p.y1]);
-        if rooms.iter().map(|r| r.door).chain(pad_rects).any(|o| near(&o)) || furniture.iter().any(|(o, _, _)| near(o)) {
+        let turn = need + cfg.footprint.length;
+        if rooms.iter().map(|r| r.door).any(|o| near(&o, turn)) || sealed.iter().chain(pad_rects.collect::<Vec<_>>().iter()).any(|o| near(o, need)) || furniture.iter().any(|(o, _, _)| near(o, need)) {
             continue;
         }
         let cells = cells_in(&grid, rect);
@@ -271,12 +276,54 @@ fn tunnel_layout(rng: &mut ChaCha8Rng) -> ([Real; 2], Vec<Corridor>, Vec<Corrido
     (size, vec![Corridor { x0: 4.0, y0: 8.0 - 0.5 * w, x1: 4.0 + len, y1: 8.0 + 0.5 * w }], Vec::new())
 }
 
+/// How far [`enterable`] looks along the corridor beyond the doorway (m).
+const ENTRY_ALONG: Real = 1.5;
+/// How far into the room the footprint's centre must get for [`enterable`] (m); its window
+/// reaches `ENTRY_DEPTH + ENTRY_ALONG` in.
+const ENTRY_DEPTH: Real = 1.0;
+
+/// Whether the footprint, on the centre line of corridor `c` at the doorway (`along`) and
+/// heading along the corridor, can get through the doorway `ENTRY_DEPTH` into `room`: a
+/// search of the small window of `grid` around the doorway (everything outside it blocked).
+///
+/// A cheap local prediction of the site-wide search: a room it rejects is never carved, so
+/// the site-wide check rarely has to wall one up again (each repair is another site-wide
+/// search of the whole grid). The verdict on the site stays with that search.
+fn enterable(grid: &OccupancyGrid, cfg: &GeneratorConfig, c: &Corridor, along: Real, side: bool, room: &Room) -> bool {
+    let (res, d) = (grid.resolution, room.door);
+    let reach = ENTRY_DEPTH + ENTRY_ALONG;
+    // the window and the target in (along, across) of the corridor, then in grid metres
+    let (window, target) = if c.horizontal() {
+        let (y0, y1) = if side { (c.y0, d[3] + reach) } else { (d[1] - reach, c.y1) };
+        ([d[0] - ENTRY_ALONG, y0, d[2] + ENTRY_ALONG, y1], [along, if side { d[3] + ENTRY_DEPTH } else { d[1] - ENTRY_DEPTH }])
+    } else {
+        let (x0, x1) = if side { (c.x0, d[2] + reach) } else { (d[0] - reach, c.x1) };
+        ([x0, d[1] - ENTRY_ALONG, x1, d[3] + ENTRY_ALONG], [if side { d[2] + ENTRY_DEPTH } else { d[0] - ENTRY_DEPTH }, along])
+    };
+    let cell = |v: Real, n: usize| ((v / res).floor().max(0.0) as usize).min(n);
+    let (i0, j0) = (cell(window[0], grid.width), cell(window[1], grid.height));
+    let (i1, j1) = (cell(window[2], grid.width), cell(window[3], grid.height));
+    let Ok(mut sub) = OccupancyGrid::new(i1 - i0, j1 - j0, res, Pose2::new(i0 as Real * res, j0 as Real * res, 0.0), Cell::Occupied) else {
+        return true;
+    };
+    let w = i1 - i0;
+    for j in j0..j1 {
+        sub.cells[(j - j0) * w..(j - j0 + 1) * w].copy_from_slice(&grid.row(j)[i0..i1]);
+    }
+    let start = if c.horizontal() { Pose2::new(along, 0.5 * (c.y0 + c.y1), 0.0) } else { Pose2::new(0.5 * (c.x0 + c.x1), along, std::f64::consts::FRAC_PI_2) };
+    // a start the footprint does not fit: no prediction, the site-wide search decides
+    footprint_reachability(&sub, cfg.footprint, cfg.margin, start).map_or(true, |r| r.reaches(target))
+}
+
 /// Rooms behind doorways in the corridor walls. Tunnels get identical rooms at a fixed pitch
 /// on alternating sides (self-similar); offices get rooms at random places where they fit.
-fn carve_rooms(rng: &mut ChaCha8Rng, grid: &mut OccupancyGrid, corridors: &[Corridor], kind: SiteKind) -> Vec<Room> {
+/// A room the footprint cannot enter ([`enterable`]) is filled in again at once; its doorway
+/// is returned in the second list, kept clear of furniture like the open ones.
+fn carve_rooms(rng: &mut ChaCha8Rng, grid: &mut OccupancyGrid, corridors: &[Corridor], cfg: &GeneratorConfig) -> (Vec<Room>, Vec<[Real; 4]>) {
     let wall = 0.2;
     let mut rooms = Vec::new();
-    let try_room = |grid: &mut OccupancyGrid, c: &Corridor, along: Real, side: bool, door: Real, rw: Real, rd: Real| {
+    let mut sealed = Vec::new();
+    let mut try_room = |grid: &mut OccupancyGrid, c: &Corridor, along: Real, side: bool, door: Real, rw: Real, rd: Real| {
         // rectangles in grid metres; `along` is the door centre along the corridor
         let (rect, door_rect) = if c.horizontal() {
             if side {
@@ -295,9 +342,16 @@ fn carve_rooms(rng: &mut ChaCha8Rng, grid: &mut OccupancyGrid, corridors: &[Corr
         }
         grid.fill_rect(rect[0], rect[1], rect[2], rect[3], Cell::Free);
         grid.fill_rect(door_rect[0], door_rect[1], door_rect[2], door_rect[3], Cell::Free);
-        Some(Room { rect, door: door_rect, centre: [0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3])] })
+        let room = Room { rect, door: door_rect, centre: [0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3])] };
+        if door >= cfg.footprint.length || enterable(grid, cfg, c, along, side, &room) {
+            Some(room)
+        } else {
+            wall_up(grid, &room);
+            sealed.push(door_rect);
+            None
+        }
     };
-    match kind {
+    match cfg.kind {
         SiteKind::Tunnel => {
             let c = corridors[0];
             let pitch = rng.random_range(8.0..14.0);
@@ -331,5 +385,40 @@ fn carve_rooms(rng: &mut ChaCha8Rng, grid: &mut OccupancyGrid, corridors: &[Corr
             }
         }
     }
-    rooms
+    drop(try_room);
+    (rooms, sealed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 12 m corridor of `width` along x at y ∈ [2, 2 + width], with a 4 × 3 m room above it
+    /// behind a doorway of `door` in a 0.2 m wall, carved into a fresh grid.
+    fn site(width: Real, door: Real) -> (OccupancyGrid, Corridor, Room) {
+        let mut g = OccupancyGrid::new(280, 200, 0.05, Pose2::default(), Cell::Occupied).unwrap();
+        let c = Corridor { x0: 1.0, y0: 2.0, x1: 13.0, y1: 2.0 + width };
+        g.fill_rect(c.x0, c.y0, c.x1, c.y1, Cell::Free);
+        let rect = [5.0, c.y1 + 0.2, 9.0, c.y1 + 3.2];
+        let door_rect = [7.0 - 0.5 * door, c.y1 - 0.01, 7.0 + 0.5 * door, c.y1 + 0.21];
+        g.fill_rect(rect[0], rect[1], rect[2], rect[3], Cell::Free);
+        g.fill_rect(door_rect[0], door_rect[1], door_rect[2], door_rect[3], Cell::Free);
+        (g, c, Room { rect, door: door_rect, centre: [7.0, c.y1 + 1.7] })
+    }
+
+    #[test]
+    fn enterable_agrees_with_the_site_wide_search() {
+        let cfg = GeneratorConfig::default();
+        for (width, door) in [(1.0, 0.8), (1.0, 1.0), (1.2, 0.9), (1.5, 0.8), (2.0, 0.9), (2.5, 0.8), (2.5, 1.4), (3.0, 1.2)] {
+            let (g, c, room) = site(width, door);
+            let local = enterable(&g, &cfg, &c, 7.0, true, &room);
+            let whole = footprint_reachability(&g, cfg.footprint, cfg.margin, Pose2::new(2.0, 0.5 * (c.y0 + c.y1), 0.0)).unwrap().reaches(room.centre);
+            assert_eq!(local, whole, "corridor {width} m, doorway {door} m");
+        }
+        // both verdicts occur: a 0.8 m doorway off a 1 m corridor cannot be turned into
+        let (g, c, room) = site(1.0, 0.8);
+        assert!(!enterable(&g, &cfg, &c, 7.0, true, &room));
+        let (g, c, room) = site(2.5, 1.4);
+        assert!(enterable(&g, &cfg, &c, 7.0, true, &room));
+    }
 }

@@ -276,13 +276,11 @@ impl OccupancyGrid {
     }
 }
 
-/// Whether two rows of cells are equal (compared eight cells a word, no early exit within
-/// 64 cells).
+/// Whether two rows of cells are equal (one `memcmp` of their bytes).
 pub(crate) fn rows_equal(a: &[Cell], b: &[Cell]) -> bool {
-    use super::bitrow::cell_bytes;
-    let same = |x: &[Cell], y: &[Cell]| x.chunks_exact(8).zip(y.chunks_exact(8)).fold(0, |acc, (p, q)| acc | (cell_bytes(p) ^ cell_bytes(q))) == 0;
-    let tail = a.len() - a.len() % 8;
-    a.len() == b.len() && a.chunks_exact(64).zip(b.chunks_exact(64)).all(|(x, y)| same(x, y)) && same(&a[a.len() - a.len() % 64..tail], &b[b.len() - b.len() % 64..tail]) && a[tail..] == b[tail..]
+    // SAFETY: `Cell` is `repr(u8)`: a slice of cells is a slice of as many bytes.
+    let bytes = |x: &[Cell]| unsafe { std::slice::from_raw_parts(x.as_ptr().cast::<u8>(), x.len()) };
+    bytes(a) == bytes(b)
 }
 
 /// 1D squared distance transform of sampled function `f` into `d`.

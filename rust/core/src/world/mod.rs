@@ -3,7 +3,7 @@
 //! Geometry is planar `f64` wall segments extruded from the floor to a height (for the 3D
 //! LIDAR). Polygons (furniture, pillars) are stored as their edges.
 
-mod bitrow;
+pub(crate) mod bitrow;
 mod cspace;
 pub mod generate;
 mod geometry;
@@ -13,6 +13,7 @@ mod map;
 mod moving;
 pub mod preset;
 pub(crate) mod recycle;
+pub(crate) mod region;
 pub mod rosmap;
 mod scenario;
 mod sim;

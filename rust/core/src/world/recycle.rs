@@ -1,4 +1,4 @@
-//! Recycled byte buffers for the big per-site rasters (occupancy grids, reachability masks).
+//! Recycled byte buffers for the big per-site rasters (occupancy grids).
 //!
 //! A new procedural site every reset allocates a few megabytes of grids and frees them again;
 //! fresh pages from the OS cost a page fault each (about a third of a reset). Grids return
@@ -53,20 +53,6 @@ pub(crate) fn give(buffer: Vec<u8>) {
     });
 }
 
-/// A `Vec<bool>` of `len` entries, every one `fill`, from the pool.
-pub(crate) fn take_bools(len: usize, fill: bool) -> Vec<bool> {
-    let mut b = std::mem::ManuallyDrop::new(take(len, fill as u8));
-    // SAFETY: `bool` has the size and alignment of `u8`, and every byte is 0 or 1.
-    unsafe { Vec::from_raw_parts(b.as_mut_ptr().cast::<bool>(), b.len(), b.capacity()) }
-}
-
-/// Returns a `Vec<bool>` from [`take_bools`] to the pool.
-pub(crate) fn give_bools(v: Vec<bool>) {
-    let mut v = std::mem::ManuallyDrop::new(v);
-    // SAFETY: `bool` has the size and alignment of `u8`; any bool is a valid `u8`.
-    give(unsafe { Vec::from_raw_parts(v.as_mut_ptr().cast::<u8>(), v.len(), v.capacity()) });
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -85,9 +71,6 @@ mod tests {
         assert_ne!(c.as_ptr(), ptr);
         assert!(c.iter().all(|&x| x == 0));
         give(b);
-        let bools = take_bools(70_000, true);
-        assert!(bools.iter().all(|&x| x));
-        give_bools(bools);
         let small = take(10, 9);
         assert_eq!(small, vec![9; 10]);
     }

@@ -1,0 +1,133 @@
+//! The free cells of an occupancy grid 4-connected to a start cell, found run by run: each
+//! row is packed into bits and cut into runs of free cells, runs overlapping in the next row
+//! are joined in a union-find, and the start's component is what a 4-connected flood fill
+//! from the start would mark, at a cost of words and runs instead of cells.
+
+use super::bitrow::{extract_runs, pack_free, words_for};
+use super::grid::OccupancyGrid;
+
+/// The region 4-connected to a start cell through [`super::Cell::Free`] cells.
+#[derive(Debug, Clone)]
+pub(crate) struct FreeRegion {
+    width: usize,
+    /// Row `j`'s runs are `runs[row_start[j]..row_start[j + 1]]`.
+    row_start: Vec<u32>,
+    /// Free runs, first and last column (inclusive).
+    runs: Vec<(i32, i32)>,
+    /// Whether each run belongs to the start's region.
+    inside: Vec<bool>,
+}
+
+fn find(parent: &mut [u32], mut r: usize) -> usize {
+    while parent[r] as usize != r {
+        let g = parent[parent[r] as usize];
+        parent[r] = g;
+        r = g as usize;
+    }
+    r
+}
+
+impl FreeRegion {
+    /// The free cells connected to `(i, j)` (none if that cell is not free).
+    pub(crate) fn new(grid: &OccupancyGrid, (si, sj): (usize, usize)) -> Self {
+        let (w, h) = (grid.width, grid.height);
+        let mut packed = vec![0u64; words_for(w)];
+        let mut runs = Vec::new();
+        let mut row_start = Vec::with_capacity(h + 1);
+        for j in 0..h {
+            row_start.push(runs.len() as u32);
+            pack_free(grid.row(j), &mut packed);
+            extract_runs(&packed, &mut runs);
+        }
+        row_start.push(runs.len() as u32);
+        let mut parent: Vec<u32> = (0..runs.len() as u32).collect();
+        for j in 1..h {
+            let (mut a, ae) = (row_start[j - 1] as usize, row_start[j] as usize);
+            let (mut b, be) = (row_start[j] as usize, row_start[j + 1] as usize);
+            while a < ae && b < be {
+                let (p, q) = (runs[a], runs[b]);
+                if p.1 >= q.0 && q.1 >= p.0 {
+                    let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                    if ra != rb {
+                        parent[ra.max(rb)] = ra.min(rb) as u32;
+                    }
+                }
+                if p.1 < q.1 {
+                    a += 1;
+                } else {
+                    b += 1;
+                }
+            }
+        }
+        let mut region = Self { width: w, row_start, runs, inside: Vec::new() };
+        let start = (si < w && sj < h).then(|| region.run_at(si, sj)).flatten().map(|r| find(&mut parent, r));
+        region.inside = (0..region.runs.len()).map(|r| Some(find(&mut parent, r)) == start).collect();
+        region
+    }
+
+    /// The run holding cell `(i, j)`, if that cell is free.
+    fn run_at(&self, i: usize, j: usize) -> Option<usize> {
+        let (a, b) = (self.row_start[j] as usize, self.row_start[j + 1] as usize);
+        let row = &self.runs[a..b];
+        let p = row.partition_point(|r| (r.1 as usize) < i);
+        (p < row.len() && row[p].0 as usize <= i).then_some(a + p)
+    }
+
+    /// Whether cell `(i, j)` is in the region (false off the grid).
+    pub(crate) fn contains(&self, i: usize, j: usize) -> bool {
+        i < self.width && j + 1 < self.row_start.len() && self.run_at(i, j).is_some_and(|r| self.inside[r])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::{Cell, Pose2};
+    use rand::{Rng, SeedableRng};
+
+    /// The cell-by-cell 4-connected flood fill.
+    fn flood(grid: &OccupancyGrid, s: (usize, usize)) -> Vec<bool> {
+        let (w, h) = (grid.width, grid.height);
+        let mut seen = vec![false; w * h];
+        let mut stack = vec![s];
+        while let Some((i, j)) = stack.pop() {
+            if grid.get(i, j) != Cell::Free || seen[j * w + i] {
+                continue;
+            }
+            seen[j * w + i] = true;
+            for (di, dj) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                let (ni, nj) = (i as i64 + di, j as i64 + dj);
+                if ni >= 0 && nj >= 0 && (ni as usize) < w && (nj as usize) < h {
+                    stack.push((ni as usize, nj as usize));
+                }
+            }
+        }
+        seen
+    }
+
+    #[test]
+    fn equals_the_cell_by_cell_flood_fill() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        for (w, h, density) in [(70, 40, 0.3), (130, 65, 0.4), (200, 3, 0.2), (64, 64, 0.45), (1, 30, 0.2)] {
+            for _ in 0..5 {
+                let mut g = OccupancyGrid::new(w, h, 0.05, Pose2::default(), Cell::Free).unwrap();
+                for j in 0..h {
+                    for i in 0..w {
+                        if rng.random_bool(density) {
+                            g.set(i, j, if rng.random_bool(0.5) { Cell::Occupied } else { Cell::Unknown });
+                        }
+                    }
+                }
+                let s = (rng.random_range(0..w), rng.random_range(0..h));
+                let region = FreeRegion::new(&g, s);
+                let want = flood(&g, s);
+                for j in 0..h {
+                    for i in 0..w {
+                        assert_eq!(region.contains(i, j), want[j * w + i], "{w}x{h} cell ({i}, {j}) from {s:?}");
+                    }
+                }
+                assert!(!region.contains(w, 0) && !region.contains(0, h));
+            }
+        }
+    }
+}
