@@ -226,8 +226,18 @@ impl World {
             let (dx, dy) = (pose.x - anchor.x, pose.y - anchor.y);
             let moved = (dx * dx + dy * dy).sqrt() + half_diagonal * wrap_angle(pose.yaw - anchor.yaw).abs();
             if moved <= CLEARANCE_BUDGET {
-                let walls = self.clearance_kept.iter().map(|s| footprint_segment_distance(&shape, pose, s));
-                return walls.fold(moving, Real::min);
+                // the bound below prunes the kept walls as it prunes a search's
+                let centre = [pose.x, pose.y];
+                self.near_c2.clear();
+                let mut c2_min = Real::INFINITY;
+                for s in &self.clearance_kept {
+                    let c2 = s.distance2_to_point(centre);
+                    c2_min = c2_min.min(c2);
+                    self.near_c2.push(c2);
+                }
+                let limit = c2_min.sqrt() - inner + half_diagonal;
+                let walls = self.clearance_kept.iter().zip(&self.near_c2).filter(|(_, &c2)| c2 < limit * limit);
+                return walls.map(|(s, _)| footprint_segment_distance(&shape, pose, s)).fold(moving, Real::min);
             }
         }
         let centre = [pose.x, pose.y];
