@@ -432,25 +432,21 @@ pub(super) fn iceil(x: Real) -> i64 {
 }
 
 /// `atan2` to about 1e-5 rad: only used to pick the beams to test, with a beam of margin
-/// (≥ 3e-3 rad at 2048 columns); the ranges themselves are exact.
+/// (≥ 3e-3 rad at 2048 columns); the ranges themselves are exact. Written as selects, not
+/// branches, so that the two end points of a wall are computed side by side.
 #[inline]
 pub(super) fn fast_atan2(y: Real, x: Real) -> Real {
     use std::f64::consts::{FRAC_PI_2, PI};
     let (ax, ay) = (x.abs(), y.abs());
-    let (mn, mx) = if ax < ay { (ax, ay) } else { (ay, ax) };
-    if mx == 0.0 {
-        return 0.0;
-    }
-    let q = mn / mx;
+    let steep = ay > ax;
+    let (mn, mx) = (ax.min(ay), ax.max(ay));
+    // 0 at the origin (0 / MIN_POSITIVE)
+    let q = mn / mx.max(Real::MIN_POSITIVE);
     let s = q * q;
     let mut r = (((-0.013_480_470 * s + 0.057_477_314) * s - 0.121_239_071) * s + 0.195_635_925) * s - 0.332_994_597;
     r = (r * s + 0.999_995_630) * q;
-    if ay > ax {
-        r = FRAC_PI_2 - r;
-    }
-    if x < 0.0 {
-        r = PI - r;
-    }
+    r = if steep { FRAC_PI_2 - r } else { r };
+    r = if x < 0.0 { PI - r } else { r };
     if y < 0.0 {
         -r
     } else {

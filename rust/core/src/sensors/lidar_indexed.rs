@@ -6,7 +6,7 @@
 
 use rand::Rng;
 
-use super::lidar::{fast_atan2, iceil, ifloor, seg_origin_distance, Lidar, Scan};
+use super::lidar::{seg_origin_distance, Lidar, Scan};
 use crate::error::Result;
 use crate::math::Real;
 use crate::world::{cross2, Pose2, Segment, SegmentIndex};
@@ -68,6 +68,21 @@ fn none_beyond_sq(ranges: &[Real], j0: i64, count: usize, d2: Real) -> bool {
     true
 }
 
+/// The two corners of the box `[x0, x1] × [y0, y1]` between which it lies as seen from
+/// `(x, y)` outside it: its angular extent is the angle between them.
+#[inline]
+fn silhouette(x: Real, y: Real, x0: Real, y0: Real, x1: Real, y1: Real) -> ([Real; 2], [Real; 2]) {
+    let (left, right, below, above) = (x < x0, x > x1, y < y0, y > y1);
+    match (left, right, below, above) {
+        (true, _, true, _) | (_, true, _, true) => ([x1, y0], [x0, y1]),
+        (true, _, _, true) | (_, true, true, _) => ([x0, y0], [x1, y1]),
+        (true, _, _, _) => ([x0, y0], [x0, y1]),
+        (_, true, _, _) => ([x1, y0], [x1, y1]),
+        (_, _, true, _) => ([x0, y0], [x1, y0]),
+        _ => ([x0, y1], [x1, y1]),
+    }
+}
+
 impl Lidar {
     /// What the last [`Lidar::scan_indexed_into`] did (buckets visited and culled, walls swept).
     pub fn last_indexed_stats(&self) -> IndexedScanStats {
@@ -79,7 +94,7 @@ impl Lidar {
     pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
         let sp = self.begin_scan(body, stamp, out)?;
         let c = self.config;
-        let (n, kch) = (c.columns, c.channels);
+        let kch = c.channels;
         let (s, co) = sp.yaw.sin_cos();
         let to_sensor = |p: [Real; 2]| {
             let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
@@ -128,7 +143,6 @@ impl Lidar {
         let origin = index.origin();
         let ci = ((sp.x - origin[0]) / cell).floor() as i64;
         let cj = ((sp.y - origin[1]) / cell).floor() as i64;
-        let inv_step = n as Real / std::f64::consts::TAU;
         let max2 = c.max_range * c.max_range;
         let mut stats = IndexedScanStats::default();
         for &(di, dj) in &scratch.offsets {
@@ -153,23 +167,13 @@ impl Lidar {
             // occlusion culling, away from the sensor: skip the bucket if every beam through
             // it already hits something no farther than the bucket's nearest point
             if planar && dmin_b > 0.5 * cell {
-                let ctr = to_sensor([0.5 * (x0 + x1), 0.5 * (y0 + y1)]);
-                let tc = fast_atan2(ctr[1], ctr[0]);
-                let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
-                for p in [[x0, y0], [x1, y0], [x1, y1], [x0, y1]] {
-                    let q = to_sensor(p);
-                    let mut d = fast_atan2(q[1], q[0]) - tc;
-                    if d > std::f64::consts::PI {
-                        d -= std::f64::consts::TAU;
-                    } else if d < -std::f64::consts::PI {
-                        d += std::f64::consts::TAU;
-                    }
-                    lo = lo.min(d);
-                    hi = hi.max(d);
-                }
-                let j0 = ifloor((tc + lo) * inv_step) - 1;
-                let j1 = iceil((tc + hi) * inv_step) + 1;
-                if none_beyond(&out.ranges, j0, ((j1 - j0 + 1) as usize).min(n), dmin_b) {
+                // seen from outside, the square spans the angle between its two silhouette
+                // corners (the others lie between them)
+                let (p, q) = silhouette(sp.x, sp.y, x0, y0, x1, y1);
+                let (a, b) = (to_sensor(p), to_sensor(q));
+                let cr = cross2(a, b);
+                let (j0, count) = self.wall_beams(a, b, cr);
+                if cr != 0.0 && none_beyond(&out.ranges, j0, count, dmin_b) {
                     stats.buckets_occluded += 1;
                     continue;
                 }
