@@ -1,5 +1,6 @@
-//! A batch of episodes stepped together: one call steps every episode, on `threads` OS
-//! threads (contiguous chunks of episodes), with automatic resets.
+//! A batch of episodes stepped together: one call steps every episode, on a pool of
+//! `threads` worker threads kept for the batch's life (episodes shared out by work stealing),
+//! with automatic resets.
 //!
 //! Episode `i` of a batch behaves exactly like a lone [`Episode`] built and reset with the
 //! same seeds: the batch only schedules them.
@@ -47,30 +48,26 @@ pub struct SlotOutcome {
 pub struct Batch {
     episodes: Vec<Episode>,
     mode: AutoReset,
-    threads: usize,
+    /// The workers (none for one thread: the calling thread steps every episode).
+    pool: Option<rayon::ThreadPool>,
     needs_reset: Vec<bool>,
     obs_len: usize,
 }
 
-/// Runs `f` over `(item, index)` in contiguous chunks on `threads` threads.
-fn par_each<T: Send, F>(items: &mut [T], threads: usize, f: F) -> Result<()>
+/// Runs `f` over `(item, index)`, on `pool`'s threads if there is one. A panic in `f` becomes
+/// an error (the other items still run).
+fn par_each<T: Send, F>(pool: Option<&rayon::ThreadPool>, items: &mut [T], f: F) -> Result<()>
 where
     F: Fn(&mut T, usize) -> Result<()> + Sync,
 {
-    let n = items.len();
-    let chunk = n.div_ceil(threads.max(1)).max(1);
-    if threads <= 1 || n <= 1 {
-        return items.iter_mut().enumerate().try_for_each(|(i, t)| f(t, i));
+    use rayon::prelude::*;
+    let guarded = |t: &mut T, i: usize| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(t, i))).unwrap_or_else(|_| Err(Error::Solver(format!("episode {i} of the batch panicked"))))
+    };
+    match pool {
+        Some(pool) if items.len() > 1 => pool.install(|| items.par_iter_mut().enumerate().map(|(i, t)| guarded(t, i)).collect::<Vec<_>>().into_iter().collect()),
+        _ => items.iter_mut().enumerate().try_for_each(|(i, t)| guarded(t, i)),
     }
-    std::thread::scope(|s| {
-        let f = &f;
-        let handles: Vec<_> = items
-            .chunks_mut(chunk)
-            .enumerate()
-            .map(|(c, part)| s.spawn(move || part.iter_mut().enumerate().try_for_each(|(k, t)| f(t, c * chunk + k))))
-            .collect();
-        handles.into_iter().try_for_each(|h| h.join().unwrap_or_else(|_| Err(Error::Solver("a batch worker thread panicked".into()))))
-    })
 }
 
 impl Batch {
@@ -82,14 +79,20 @@ impl Batch {
         if threads == 0 {
             return Err(Error::invalid("threads", "must be at least 1"));
         }
+        let pool = if threads > 1 {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).thread_name(|k| format!("shieldnav-batch-{k}")).build();
+            Some(pool.map_err(|e| Error::invalid("threads", format!("could not start {threads} worker threads: {e}")))?)
+        } else {
+            None
+        };
         let mut slots: Vec<Option<Episode>> = (0..seeds.len()).map(|_| None).collect();
-        par_each(&mut slots, threads, |slot, i| {
+        par_each(pool.as_ref(), &mut slots, |slot, i| {
             *slot = Some(Episode::new(site.clone(), config.clone(), seeds[i])?);
             Ok(())
         })?;
         let episodes: Vec<Episode> = slots.into_iter().map(|e| e.expect("every slot is built")).collect();
         let obs_len = episodes[0].observation_len();
-        Ok(Self { needs_reset: vec![false; episodes.len()], episodes, mode, threads, obs_len })
+        Ok(Self { needs_reset: vec![false; episodes.len()], episodes, mode, pool, obs_len })
     }
 
     /// Number of episodes.
@@ -125,7 +128,7 @@ impl Batch {
         self.check_len("observations", obs.len(), self.obs_len)?;
         let l = self.obs_len;
         let mut work: Vec<(&mut Episode, &mut [f32])> = self.episodes.iter_mut().zip(obs.chunks_mut(l)).collect();
-        par_each(&mut work, self.threads, |(ep, o), i| {
+        par_each(self.pool.as_ref(), &mut work, |(ep, o), i| {
             ep.reset(seeds[i])?;
             ep.observe(o)
         })?;
@@ -153,7 +156,7 @@ impl Batch {
             .zip(out.iter_mut())
             .map(|(((ep, nr), (o, f)), s)| (ep, nr, o, f, s))
             .collect();
-        par_each(&mut work, self.threads, |(ep, needs_reset, o, f, slot), i| {
+        par_each(self.pool.as_ref(), &mut work, |(ep, needs_reset, o, f, slot), i| {
             if **needs_reset {
                 ep.reset(next_seeds[i])?;
                 **slot = SlotOutcome { report: StepReport::default(), reset: true, ended: None };

@@ -61,23 +61,21 @@ pub fn bin_ranges(scan: &Scan, cos_el: &[Real], max_range: Real, out: &mut [f32]
     let bins = out.len();
     out.iter_mut().for_each(|v| *v = 1.0);
     let cols = scan.columns;
+    // column i goes to bin ((i · bins + cols / 2) / cols) mod bins: bin b holds the columns
+    // from start(b) to start(b + 1), and bin 0 also those from start(bins) on
+    let start = |b: usize| (b * cols).saturating_sub(cols / 2).div_ceil(bins);
+    // the least range of a bin gives its value: r ↦ (r cos / max) rounds monotonically
+    let least = |s: &[Real]| s.iter().fold(Real::INFINITY, |m, &r| if r < m { r } else { m });
     for (k, c) in cos_el.iter().enumerate() {
         let row = &scan.ranges[k * cols..(k + 1) * cols];
-        // column i goes to bin ((i · bins + cols / 2) / cols) mod bins; walked without a
-        // division per column (quotient `b`, remainder `rem`)
-        let (mut b, mut rem) = (0, cols / 2);
-        for &r in row {
+        for (b, o) in out.iter_mut().enumerate() {
+            let mut r = least(&row[start(b)..start(b + 1)]);
+            if b == 0 {
+                r = r.min(least(&row[start(bins)..]));
+            }
             let v = (r * c / max_range) as f32;
-            if v < out[b] {
-                out[b] = v;
-            }
-            rem += bins;
-            while rem >= cols {
-                rem -= cols;
-                b += 1;
-            }
-            if b == bins {
-                b = 0;
+            if v < *o {
+                *o = v;
             }
         }
     }
