@@ -100,9 +100,12 @@ def plot_scenario(scenario: str, traces: dict[str, dict[str, Any]], timing: dict
                 ax[0, k].plot(t, us[:, k], color="purple", lw=1.2, ls="--", label="u*")
                 ax[0, k].set(title=f"body-frame u_{name} (composite)", xlabel="t (s)", ylabel="m/s")
                 ax[0, k].legend()
-        ax[0, 2].plot(t, tr["H"], lw=1, label=f"H ({shield})")
+        # the shield reports f64::MAX for a scan with no point in the crop: not plotted
+        H = np.asarray(tr["H"], dtype=np.float64)
+        H[H >= 1e300] = np.nan
+        ax[0, 2].plot(t, H, lw=1, label=f"H ({shield})")
         h_min = np.asarray(tr["h_min"], dtype=np.float64)
-        h_min[h_min >= 1e300] = np.nan  # the shield reports f64::MAX for a scan with no point in the crop
+        h_min[h_min >= 1e300] = np.nan
         ax[1, 0].plot(t, h_min, lw=1, label=f"min h_i ({shield})")
     ax[0, 2].axhline(0, color="k", lw=0.5)
     ax[0, 2].set(title="composite barrier H", xlabel="t (s)")
@@ -111,6 +114,8 @@ def plot_scenario(scenario: str, traces: dict[str, dict[str, Any]], timing: dict
     ax[1, 0].set(title="smallest individual barrier", xlabel="t (s)", ylim=(-1, 3))
     ax[1, 0].legend(fontsize=8)
     for shield, (us, n) in timing.items():
+        us = np.asarray(us, dtype=np.float64)
+        us = np.where(us > 0, us, np.nan)  # log axes: a call timed at 0 µs is not drawn
         ax[1, 1].plot(np.arange(len(us)) * 0.02, us, lw=0.6, label=shield)
         ax[1, 2].scatter(n, us, s=2, alpha=0.4, label=shield)
     ax[1, 1].set(title="shield time per call", xlabel="t (s)", ylabel="µs", yscale="log")

@@ -82,3 +82,23 @@ def test_ray_backend_gives_the_local_numbers(tmp_path):
     assert local.keys() == remote.keys()
     for key in local:
         assert {k: v for k, v in local[key].items() if k not in timing} == {k: v for k, v in remote[key].items() if k not in timing}
+
+
+def test_figures_skip_the_empty_scan_sentinel_and_zero_times(tmp_path):
+    """A scan with no point in the crop gives H = h_min = f64::MAX, and a shield call can time
+    at 0 µs: the figure draws neither (no overflow on the axes) and is still written."""
+    import warnings
+
+    from agents import report
+
+    big = np.finfo(np.float64).max
+    n = 50
+    trace = {"t": np.arange(n) * 0.02, "u_nom": np.zeros((n, 3)), "u_star": np.zeros((n, 3)),
+             "H": np.r_[np.full(10, big), np.linspace(1.0, 0.2, n - 10)],
+             "h_min": np.r_[np.full(10, big), np.linspace(1.5, 0.3, n - 10)]}
+    timing = {"composite": (np.r_[np.zeros(5), np.full(n - 5, 2.0)], np.full(n, 100))}
+    path = tmp_path / "fig.png"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        report.plot_scenario("test", {"composite": trace}, timing, path)
+    assert path.stat().st_size > 10_000
