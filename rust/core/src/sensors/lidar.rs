@@ -178,6 +178,8 @@ pub struct Lidar {
     el_sin: Vec<Real>,
     /// Walls in range, in the sensor frame: `(distance, a, b, height)`, nearest first.
     visible: Vec<(Real, [Real; 2], [Real; 2], Real)>,
+    /// Sort keys of `visible` (see [`Lidar::scan_into`]).
+    order: Vec<u64>,
     /// Scratch of [`Lidar::scan_indexed_into`].
     pub(super) indexed: super::lidar_indexed::IndexedScratch,
 }
@@ -199,6 +201,7 @@ impl Lidar {
             el_cos: elev.iter().map(|e| e.cos()).collect(),
             el_sin: elev.iter().map(|e| e.sin()).collect(),
             visible: Vec::new(),
+            order: Vec::new(),
             indexed: Default::default(),
         })
     }
@@ -265,11 +268,25 @@ impl Lidar {
                 }
             }
         }
-        // nearest first, so that occluded beams of farther walls are skipped by one compare
-        visible.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-        for &(dmin, a, b, height) in &visible {
-            self.sweep_segment(a, b, height, dmin, zs, &mut out.ranges);
+        // nearest first, so that occluded beams of farther walls are skipped by one compare:
+        // sorted as keys, a distance's bits (ordered like the distance, which is ≥ 0) with the
+        // low 16 replaced by the wall's place (the order only decides how much is skipped)
+        let mut order = std::mem::take(&mut self.order);
+        order.clear();
+        if visible.len() <= 1 << 16 {
+            order.extend(visible.iter().enumerate().map(|(k, v)| (v.0.to_bits() & !0xFFFF) | k as u64));
+            order.sort_unstable();
+            for key in &order {
+                let (dmin, a, b, height) = visible[(key & 0xFFFF) as usize];
+                self.sweep_segment(a, b, height, dmin, zs, &mut out.ranges);
+            }
+        } else {
+            visible.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+            for &(dmin, a, b, height) in &visible {
+                self.sweep_segment(a, b, height, dmin, zs, &mut out.ranges);
+            }
         }
+        self.order = order;
         self.visible = visible;
         self.finish(rng, out);
         Ok(())
@@ -377,31 +394,40 @@ impl Lidar {
         let c = &self.config;
         let n = c.columns;
         let (ms, mc) = c.mount.yaw.sin_cos();
-        out.points.clear();
-        out.points.reserve(out.ranges.len());
-        for k in 0..c.channels {
-            for i in 0..n {
-                let r = &mut out.ranges[k * n + i];
-                if *r < c.min_range || *r > c.max_range {
+        let (lo, hi) = (c.min_range, c.max_range);
+        let in_range = |r: Real| r >= lo && r <= hi;
+        if c.range_noise_std == 0.0 && c.dropout == 0.0 {
+            // no draws: the range limits alone, without branches
+            out.ranges.iter_mut().for_each(|r| *r = if in_range(*r) { *r } else { Real::INFINITY });
+        } else {
+            // the draws, in beam order, only for returns in range (as the RNG stream requires)
+            for r in out.ranges.iter_mut() {
+                if !in_range(*r) {
                     *r = Real::INFINITY;
-                } else {
-                    if c.range_noise_std > 0.0 {
-                        *r += c.range_noise_std * standard_normal(rng);
-                        if *r < c.min_range || *r > c.max_range {
-                            *r = Real::INFINITY;
-                        }
-                    }
-                    if c.dropout > 0.0 && rng.random::<Real>() < c.dropout {
+                    continue;
+                }
+                if c.range_noise_std > 0.0 {
+                    *r += c.range_noise_std * standard_normal(rng);
+                    if !in_range(*r) {
                         *r = Real::INFINITY;
                     }
                 }
-                if r.is_finite() {
-                    let h = *r * self.el_cos[k];
-                    let (xs, ys) = (h * self.az_cos[i], h * self.az_sin[i]);
-                    out.points.push([c.mount.x + mc * xs - ms * ys, c.mount.y + ms * xs + mc * ys, c.mount.z + *r * self.el_sin[k]]);
-                } else {
-                    out.points.push([Real::NAN; 3]);
+                if c.dropout > 0.0 && rng.random::<Real>() < c.dropout {
+                    *r = Real::INFINITY;
                 }
+            }
+        }
+        // the points, without branches (several beams at once)
+        out.points.clear();
+        out.points.resize(out.ranges.len(), [Real::NAN; 3]);
+        for k in 0..c.channels {
+            let (ec, es) = (self.el_cos[k], self.el_sin[k]);
+            let rows = out.ranges[k * n..(k + 1) * n].iter().zip(&mut out.points[k * n..(k + 1) * n]);
+            for ((&r, p), (&ac, &as_)) in rows.zip(self.az_cos.iter().zip(&self.az_sin)) {
+                let h = r * ec;
+                let (xs, ys) = (h * ac, h * as_);
+                let q = [c.mount.x + mc * xs - ms * ys, c.mount.y + ms * xs + mc * ys, c.mount.z + r * es];
+                *p = if r.is_finite() { q } else { [Real::NAN; 3] };
             }
         }
     }
