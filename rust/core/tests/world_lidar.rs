@@ -127,6 +127,29 @@ fn beam_through_a_segment_end_point_hits_it() {
 }
 
 #[test]
+fn tiny_walls_starting_on_or_beside_a_beam_match_brute_force() {
+    // walls whose angular interval begins exactly on a beam's azimuth, or a hair beside it,
+    // and spans less than a beam step: the beam interval of each wall must still include
+    // every beam that hits it (the angle slack of `wall_beams`)
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    for cols in [512, 1024, 2048] {
+        let lidar = Lidar::new(exact(1, cols)).unwrap();
+        let mut walls = Vec::new();
+        for j in (0..cols).step_by(7) {
+            let d = lidar.beam_direction(0, j);
+            let r = rng.random_range(0.5..12.0);
+            let off = [0.0, 1e-12, -1e-12, 1e-9, -1e-9][j % 5];
+            let p = [r * d[0] - off * d[1], r * d[1] + off * d[0]];
+            let side = if j % 2 == 0 { 1.0 } else { -1.0 };
+            let len = [1e-4, 1e-3, 0.01][j % 3];
+            walls.push(Segment::new(p, [p[0] - side * len * d[1], p[1] + side * len * d[0]], 2.0));
+        }
+        let hits = compare(&walls, exact(1, cols), &[Pose2::default()]);
+        assert!(hits > cols / 14, "{cols} columns: only {hits} returns");
+    }
+}
+
+#[test]
 fn moving_obstacles_are_seen_when_they_arrive() {
     let s = preset("dynamic_obstacles").unwrap();
     let door = s.obstacles.iter().find(|o| o.name == "door").unwrap();
