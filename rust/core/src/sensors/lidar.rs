@@ -260,10 +260,14 @@ impl Lidar {
                 }
                 let (dxa, dya) = (seg.a[0] - sp.x, seg.a[1] - sp.y);
                 let (dxb, dyb) = (seg.b[0] - sp.x, seg.b[1] - sp.y);
-                let a = [co * dxa + s * dya, -s * dxa + co * dya];
-                let b = [co * dxb + s * dyb, -s * dxb + co * dyb];
-                let dmin = seg_origin_distance(a, b);
+                // the distance to the wall's bounding box: a lower bound of the wall's (exact
+                // for axis-aligned walls), all the order and the occluded-beam skip need
+                let bx = dxa.min(dxb).max(0.0).max(-dxa.max(dxb));
+                let by = dya.min(dyb).max(0.0).max(-dya.max(dyb));
+                let dmin = (bx * bx + by * by).sqrt();
                 if dmin <= c.max_range {
+                    let a = [co * dxa + s * dya, -s * dxa + co * dya];
+                    let b = [co * dxb + s * dyb, -s * dxb + co * dyb];
                     visible.push((dmin, a, b, seg.height));
                 }
             }
