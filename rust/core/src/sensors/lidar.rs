@@ -424,16 +424,20 @@ impl Lidar {
         }
         // the points, without branches (several beams at once)
         out.points.clear();
-        out.points.resize(out.ranges.len(), [Real::NAN; 3]);
+        out.points.reserve(out.ranges.len());
         for k in 0..c.channels {
             let (ec, es) = (self.el_cos[k], self.el_sin[k]);
-            let rows = out.ranges[k * n..(k + 1) * n].iter().zip(&mut out.points[k * n..(k + 1) * n]);
-            for ((&r, p), (&ac, &as_)) in rows.zip(self.az_cos.iter().zip(&self.az_sin)) {
+            let row = out.ranges[k * n..(k + 1) * n].iter().zip(self.az_cos.iter().zip(&self.az_sin));
+            out.points.extend(row.map(|(&r, (&ac, &as_))| {
                 let h = r * ec;
                 let (xs, ys) = (h * ac, h * as_);
                 let q = [c.mount.x + mc * xs - ms * ys, c.mount.y + ms * xs + mc * ys, c.mount.z + r * es];
-                *p = if r.is_finite() { q } else { [Real::NAN; 3] };
-            }
+                if r.is_finite() {
+                    q
+                } else {
+                    [Real::NAN; 3]
+                }
+            }));
         }
     }
 }
