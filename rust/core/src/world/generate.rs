@@ -14,9 +14,10 @@
 //! around the doorway gets the footprint in; and furniture keeps a footprint's length more
 //! from doorways (room to turn in). A room the site-wide search cannot reach even without
 //! furniture is walled up again; the pieces of furniture next to what they cut off are
-//! removed (and, should that not be enough, the fewest pieces, last placed first). The verdict always comes from a search of the grid
-//! as finally left, and the grid is exactly the map: walls are its cell edges and each
-//! furniture box is drawn as the cells it fills (details in `generate/repair.rs`).
+//! removed (and, should that not be enough, the fewest pieces, last placed first). The
+//! verdict always comes from a search of the grid as finally left, and the grid is exactly the
+//! map: walls are its cell edges and each furniture box is drawn as the cells it fills
+//! (details in `generate/repair.rs`).
 //!
 //! ```
 //! use shieldnav_core::world::generate::{generate, GeneratorConfig};
@@ -182,7 +183,7 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         let near = |o: &[Real; 4], need: Real| rect[0] - need < o[2] && o[0] < rect[2] + need && rect[1] - need < o[3] && o[1] < rect[3] + need;
         let pad_rects = pads.iter().map(|p| [p.x0, p.y0, p.x1, p.y1]);
         let turn = need + cfg.footprint.length;
-        if rooms.iter().map(|r| r.door).any(|o| near(&o, turn)) || sealed.iter().chain(pad_rects.collect::<Vec<_>>().iter()).any(|o| near(o, need)) || furniture.iter().any(|(o, _, _)| near(o, need)) {
+        if rooms.iter().any(|r| near(&r.door, turn)) || sealed.iter().copied().chain(pad_rects).any(|o| near(&o, need)) || furniture.iter().any(|(o, _, _)| near(o, need)) {
             continue;
         }
         let cells = cells_in(&grid, rect);
