@@ -214,7 +214,6 @@ impl World {
         let pose = self.physics.robot_pose();
         let shape = self.config.robot;
         let half_diagonal = 0.5 * shape.length.hypot(shape.width);
-        let inner = 0.5 * shape.length.min(shape.width);
         let moving = {
             self.moving_now.clear();
             for o in &self.scenario.obstacles {
@@ -226,18 +225,7 @@ impl World {
             let (dx, dy) = (pose.x - anchor.x, pose.y - anchor.y);
             let moved = (dx * dx + dy * dy).sqrt() + half_diagonal * wrap_angle(pose.yaw - anchor.yaw).abs();
             if moved <= CLEARANCE_BUDGET {
-                // the bound below prunes the kept walls as it prunes a search's
-                let centre = [pose.x, pose.y];
-                self.near_c2.clear();
-                let mut c2_min = Real::INFINITY;
-                for s in &self.clearance_kept {
-                    let c2 = s.distance2_to_point(centre);
-                    c2_min = c2_min.min(c2);
-                    self.near_c2.push(c2);
-                }
-                let limit = c2_min.sqrt() - inner + half_diagonal;
-                let walls = self.clearance_kept.iter().zip(&self.near_c2).filter(|(_, &c2)| c2 < limit * limit);
-                return walls.map(|(s, _)| footprint_segment_distance(&shape, pose, s)).fold(moving, Real::min);
+                return pruned_footprint_distance(&shape, pose, &self.clearance_kept, &mut self.near_c2).min(moving);
             }
         }
         let centre = [pose.x, pose.y];
@@ -245,25 +233,7 @@ impl World {
         loop {
             // walls up to `2B` beyond the answer are kept, so the query reaches that far too
             self.index.query_into(centre, half_diagonal + radius + 2.0 * CLEARANCE_BUDGET, &mut self.near);
-            // The footprint holds the disc of radius `inner` about the centre and lies inside
-            // the one of radius `half_diagonal`; with `c` the centre's distance to a wall, the
-            // footprint's is in [c − half_diagonal, c − inner]. So the nearest centre distance
-            // bounds the answer from above, and only walls whose centre distance is below that
-            // bound plus `half_diagonal − inner` need the exact footprint test (squared: no root).
-            let mut c2_min = Real::INFINITY;
-            self.near_c2.clear();
-            for s in &self.near {
-                let c2 = s.distance2_to_point(centre);
-                c2_min = c2_min.min(c2);
-                self.near_c2.push(c2);
-            }
-            let limit = c2_min.sqrt() - inner + half_diagonal;
-            let mut d = Real::INFINITY;
-            for (s, &c2) in self.near.iter().zip(&self.near_c2) {
-                if c2 < limit * limit {
-                    d = d.min(footprint_segment_distance(&shape, pose, s));
-                }
-            }
+            let d = pruned_footprint_distance(&shape, pose, &self.near, &mut self.near_c2);
             let everything = self.near.len() == self.index.segments().len();
             if d <= radius || everything {
                 // keep every wall that may lie within `d + 2B` of the footprint
@@ -317,4 +287,22 @@ impl World {
         }
         v
     }
+}
+
+/// The least distance from the footprint `shape` at `pose` to `walls` (∞ for none), with each
+/// wall's squared centre distance left in `c2`.
+///
+/// The footprint holds the disc of radius `inner` (half its smaller side) about its centre and
+/// lies inside the one of radius `half_diagonal`; with `c` the centre's distance to a wall,
+/// the footprint's is in [c − half_diagonal, c − inner]. So the nearest centre distance bounds
+/// the answer from above, and only walls whose centre distance is below that bound plus
+/// `half_diagonal − inner` need the exact footprint test (compared squared: no root).
+fn pruned_footprint_distance(shape: &RobotShape, pose: Pose2, walls: &[Segment], c2: &mut Vec<Real>) -> Real {
+    let half_diagonal = 0.5 * shape.length.hypot(shape.width);
+    let inner = 0.5 * shape.length.min(shape.width);
+    let centre = [pose.x, pose.y];
+    c2.clear();
+    c2.extend(walls.iter().map(|s| s.distance2_to_point(centre)));
+    let limit = c2.iter().fold(Real::INFINITY, |m, &x| m.min(x)).sqrt() - inner + half_diagonal;
+    walls.iter().zip(c2.iter()).filter(|(_, &x)| x < limit * limit).map(|(s, _)| footprint_segment_distance(shape, pose, s)).fold(Real::INFINITY, Real::min)
 }
