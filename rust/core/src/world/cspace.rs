@@ -19,6 +19,7 @@
 
 use super::bitrow::{erode, extract_runs, pack_free, shifted_word, words_for};
 use super::grid::{rows_equal, OccupancyGrid};
+use super::region::{find, join_overlapping, run_holding};
 use crate::math::Real;
 
 /// Orientations of the search: the 16 headings modulo the footprint's half-turn symmetry.
@@ -62,43 +63,18 @@ impl Space {
     /// Index of the run of orientation `k` in row `j` that holds column `i`.
     pub fn run_at(&self, k: usize, j: usize, i: i32) -> Option<usize> {
         let (a, _) = self.groups[self.row_group[k * self.height + j] as usize];
-        let runs = self.row_runs(k, j);
-        let p = runs.partition_point(|r| r.1 < i);
-        (p < runs.len() && runs[p].0 <= i).then_some(a as usize + p)
+        run_holding(self.row_runs(k, j), i).map(|p| a as usize + p)
     }
 
     /// The component (root run) of run `r`.
-    pub fn find(&mut self, mut r: usize) -> usize {
-        while self.parent[r] as usize != r {
-            let g = self.parent[self.parent[r] as usize];
-            self.parent[r] = g;
-            r = g as usize;
-        }
-        r
-    }
-
-    fn union(&mut self, a: usize, b: usize) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            let (lo, hi) = (ra.min(rb), ra.max(rb));
-            self.parent[hi] = lo as u32;
-        }
+    pub fn find(&mut self, r: usize) -> usize {
+        find(&mut self.parent, r)
     }
 
     /// Joins the runs of groups `g` and `h` that overlap, columns widened by `tol`.
     fn join(&mut self, g: u32, h: u32, tol: i32) {
-        let ((mut a, ae), (mut b, be)) = (self.groups[g as usize], self.groups[h as usize]);
-        while a < ae && b < be {
-            let (p, q) = (self.runs[a as usize], self.runs[b as usize]);
-            if p.1 + tol >= q.0 && q.1 + tol >= p.0 {
-                self.union(a as usize, b as usize);
-            }
-            if p.1 < q.1 {
-                a += 1;
-            } else {
-                b += 1;
-            }
-        }
+        let ((a, ae), (b, be)) = (self.groups[g as usize], self.groups[h as usize]);
+        join_overlapping(&self.runs, &mut self.parent, (a as usize, ae as usize), (b as usize, be as usize), tol);
     }
 }
 

@@ -18,13 +18,44 @@ pub(crate) struct FreeRegion {
     inside: Vec<bool>,
 }
 
-fn find(parent: &mut [u32], mut r: usize) -> usize {
+/// The component (root run) of run `r` in the union-find `parent` (path halving).
+pub(crate) fn find(parent: &mut [u32], mut r: usize) -> usize {
     while parent[r] as usize != r {
         let g = parent[parent[r] as usize];
         parent[r] = g;
         r = g as usize;
     }
     r
+}
+
+/// Joins the components of runs `a` and `b` (the lower root becomes the root).
+pub(crate) fn union(parent: &mut [u32], a: usize, b: usize) {
+    let (ra, rb) = (find(parent, a), find(parent, b));
+    if ra != rb {
+        parent[ra.max(rb)] = ra.min(rb) as u32;
+    }
+}
+
+/// Joins every run of `runs[a.0..a.1]` with every run of `runs[b.0..b.1]` it overlaps, columns
+/// widened by `tol` (both ranges sorted by column, runs disjoint within each).
+pub(crate) fn join_overlapping(runs: &[(i32, i32)], parent: &mut [u32], (mut a, ae): (usize, usize), (mut b, be): (usize, usize), tol: i32) {
+    while a < ae && b < be {
+        let (p, q) = (runs[a], runs[b]);
+        if p.1 + tol >= q.0 && q.1 + tol >= p.0 {
+            union(parent, a, b);
+        }
+        if p.1 < q.1 {
+            a += 1;
+        } else {
+            b += 1;
+        }
+    }
+}
+
+/// The place in `runs` (sorted, disjoint) of the run holding column `i`.
+pub(crate) fn run_holding(runs: &[(i32, i32)], i: i32) -> Option<usize> {
+    let p = runs.partition_point(|r| r.1 < i);
+    (p < runs.len() && runs[p].0 <= i).then_some(p)
 }
 
 impl FreeRegion {
@@ -42,22 +73,8 @@ impl FreeRegion {
         row_start.push(runs.len() as u32);
         let mut parent: Vec<u32> = (0..runs.len() as u32).collect();
         for j in 1..h {
-            let (mut a, ae) = (row_start[j - 1] as usize, row_start[j] as usize);
-            let (mut b, be) = (row_start[j] as usize, row_start[j + 1] as usize);
-            while a < ae && b < be {
-                let (p, q) = (runs[a], runs[b]);
-                if p.1 >= q.0 && q.1 >= p.0 {
-                    let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                    if ra != rb {
-                        parent[ra.max(rb)] = ra.min(rb) as u32;
-                    }
-                }
-                if p.1 < q.1 {
-                    a += 1;
-                } else {
-                    b += 1;
-                }
-            }
+            let (above, below) = (row_start[j - 1] as usize, row_start[j] as usize);
+            join_overlapping(&runs, &mut parent, (above, below), (below, row_start[j + 1] as usize), 0);
         }
         let mut region = Self { width: w, row_start, runs, inside: Vec::new() };
         let start = (si < w && sj < h).then(|| region.run_at(si, sj)).flatten().map(|r| find(&mut parent, r));
@@ -67,10 +84,8 @@ impl FreeRegion {
 
     /// The run holding cell `(i, j)`, if that cell is free.
     fn run_at(&self, i: usize, j: usize) -> Option<usize> {
-        let (a, b) = (self.row_start[j] as usize, self.row_start[j + 1] as usize);
-        let row = &self.runs[a..b];
-        let p = row.partition_point(|r| (r.1 as usize) < i);
-        (p < row.len() && row[p].0 as usize <= i).then_some(a + p)
+        let a = self.row_start[j] as usize;
+        run_holding(&self.runs[a..self.row_start[j + 1] as usize], i as i32).map(|p| a + p)
     }
 
     /// Whether cell `(i, j)` is in the region (false off the grid).
