@@ -72,6 +72,20 @@ def test_real_maps_load_and_scan_matches_numpy(yaml):
     assert_scan_matches(w, columns=1024, rmax=10.0)
 
 
+@pytest.mark.skipif(not MAPS.is_dir(), reason=f"{MAPS} absent (shared maps beside the repository)")
+def test_unreachable_map_walls_are_dropped_without_changing_the_scan():
+    yaml = str(MAPS / "upenn_levine_lobby" / "levinelobby.yaml")
+    pruned = World(ros_map=yaml, range_noise_std=0.0, channels=16)
+    full = World(ros_map=yaml, range_noise_std=0.0, channels=16, unreachable_walls=True)
+    assert len(pruned.walls) < 0.9 * len(full.walls)
+    np.testing.assert_array_equal(pruned.ranges, full.ranges)
+    for _ in range(20):
+        for w in (pruned, full):
+            w.step(0.6, 0.0, 0.3)
+    np.testing.assert_array_equal(pruned.true_pose, full.true_pose)
+    np.testing.assert_array_equal(pruned.ranges, full.ranges)
+
+
 def test_points_are_ranges_in_the_body_frame():
     w = World(preset="constricted_passage", range_noise_std=0.0, mount=(0.2, 0.0, 0.6, 0.0))
     r = w.ranges[0]

@@ -161,6 +161,7 @@ class World:
         robot_width: float = 0.5,
         corner_radius: float = 0.0,
         unknown_is_wall: bool = True,
+        unreachable_walls: bool = False,
     ) -> World: ...
     def step(self, vx: float, vy: float, wz: float) -> dict[str, Any]: ...
     @property

@@ -214,3 +214,4 @@ fn one_sided_grid_walls_give_the_two_sided_reference_ranges_in_free_space() {
         assert!(hits > 500 * poses.len());
     }
 }
+

@@ -109,12 +109,13 @@ macro_rules! each_field {
 }
 
 /// Keys that are not plain fields.
-const SPECIAL: [&str; 5] = [
+const SPECIAL: [&str; 6] = [
     "shield",
     "action_mode",
     "lidar_mount",
     "site_kind",
     "unknown_is_wall",
+    "unreachable_walls",
 ];
 
 /// Every key [`episode_config`] accepts.
@@ -209,6 +210,11 @@ pub fn episode_config(
             .extract()
             .map_err(|_| invalid("unknown_is_wall", "expected a bool"))?;
     }
+    if let Some(v) = kw.get_item("unreachable_walls")? {
+        site.ros_map.unreachable_walls = v
+            .extract()
+            .map_err(|_| invalid("unreachable_walls", "expected a bool"))?;
+    }
     c.world.lidar.validate().map_err(crate::errors::to_py)?;
     c.world.robot.validate().map_err(crate::errors::to_py)?;
     site.generator.footprint = shieldnav_core::world::Footprint {
@@ -234,5 +240,6 @@ pub fn episode_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("lidar_mount", (m.x, m.y, m.z, m.yaw))?;
     d.set_item("site_kind", "office")?;
     d.set_item("unknown_is_wall", RosMapOptions::default().unknown_is_wall)?;
+    d.set_item("unreachable_walls", RosMapOptions::default().unreachable_walls)?;
     Ok(d)
 }

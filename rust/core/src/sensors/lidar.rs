@@ -299,18 +299,26 @@ impl Lidar {
     /// Sweeps one wall given in the sensor frame, `dmin` its distance from the sensor.
     #[inline]
     pub(super) fn sweep_segment(&self, a: [Real; 2], b: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
-        let cr = cross2(a, b);
+        self.sweep_piece(a, b, a, b, height, dmin, zs, best);
+    }
+
+    /// Sweeps the beams through the part `p q` of the wall `a b` (sensor frame) with hits on
+    /// the whole wall; `dmin` is no farther than the part.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(super) fn sweep_piece(&self, a: [Real; 2], b: [Real; 2], p: [Real; 2], q: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
+        let cr = cross2(p, q);
         if cr == 0.0 {
             // collinear with the sensor: only the beams at the end points can hit
             let inv_step = self.config.columns as Real / std::f64::consts::TAU;
-            for p in [a, b] {
-                let f = fast_atan2(p[1], p[0]) * inv_step;
+            for e in [p, q] {
+                let f = fast_atan2(e[1], e[0]) * inv_step;
                 let j0 = ifloor(f) - 1;
                 self.sweep(a, b, height, j0, ((iceil(f) + 1 - j0 + 1) as usize).min(self.config.columns), zs, dmin, best);
             }
             return;
         }
-        let (j0, count) = self.wall_beams(a, b, cr);
+        let (j0, count) = self.wall_beams(p, q, cr);
         self.sweep(a, b, height, j0, count, zs, dmin, best);
     }
 
@@ -394,6 +402,35 @@ impl Lidar {
         }
     }
 
+    /// [`Lidar::sweep`] for a planar ring, without branches but for walls parallel to a beam:
+    /// for the few beams of a small wall, where each branch would be a coin toss.
+    #[inline]
+    pub(super) fn sweep_flat(&self, a: [Real; 2], b: [Real; 2], j0: i64, count: usize, best: &mut [Real]) {
+        let n = self.config.columns;
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let ae = cross2(a, e);
+        let mut i = (j0 & (n as i64 - 1)) as usize;
+        for _ in 0..count {
+            let (dc, ds) = (self.az_cos[i], self.az_sin[i]);
+            let den = dc * e[1] - ds * e[0];
+            let sn = a[0] * ds - a[1] * dc;
+            let cur = best[i];
+            best[i] = if den == 0.0 {
+                ray_segment_distance([0.0, 0.0], [dc, ds], a, b).map_or(cur, |t| t.min(cur))
+            } else {
+                // the same test and the same quotient as `sweep`
+                let hit = (den > 0.0) & (ae >= 0.0) & (sn >= 0.0) & (sn <= den) | (den < 0.0) & (ae <= 0.0) & (sn <= 0.0) & (sn >= den);
+                let t = ae / den;
+                if hit & (t < cur) {
+                    t
+                } else {
+                    cur
+                }
+            };
+            i = (i + 1) & (n - 1);
+        }
+    }
+
     /// Applies range limits, noise and dropout, and fills the body-frame points.
     pub(super) fn finish<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut Scan) {
         let c = &self.config;
@@ -452,18 +489,23 @@ pub(super) fn seg_origin_distance(a: [Real; 2], b: [Real; 2]) -> Real {
     (x * x + y * y).sqrt()
 }
 
-/// `x.floor()` as an integer, for `|x| < 2^62`, without a libm call.
+/// `1.5 · 2^52`: for `|x| < 2^51`, `x + ROUND` is `x` rounded to an integer `n`, and its bits
+/// less `ROUND`'s are `n`.
+const ROUND: Real = 6_755_399_441_055_744.0;
+
+/// `x.floor()` as an integer, for `|x| < 2^51`, without a libm call or a float–integer
+/// conversion (`as` saturates and checks for NaN; `cvtsi2sd` waits on its register).
 #[inline]
 pub(super) fn ifloor(x: Real) -> i64 {
-    let i = x as i64;
-    i - ((i as Real) > x) as i64
+    let y = x + ROUND;
+    (y.to_bits() as i64 - ROUND.to_bits() as i64) - ((y - ROUND) > x) as i64
 }
 
-/// `x.ceil()` as an integer, for `|x| < 2^62`, without a libm call.
+/// `x.ceil()` as an integer, for `|x| < 2^51`, like [`ifloor`].
 #[inline]
 pub(super) fn iceil(x: Real) -> i64 {
-    let i = x as i64;
-    i + ((i as Real) < x) as i64
+    let y = x + ROUND;
+    (y.to_bits() as i64 - ROUND.to_bits() as i64) + ((y - ROUND) < x) as i64
 }
 
 /// How far (rad) [`Lidar::wall_beams`] widens a wall's angular interval: five times the error
@@ -508,6 +550,18 @@ mod tests {
             worst = worst.max((fast_atan2(y, x) - y.atan2(x)).abs());
         }
         assert!(worst < 2e-5, "worst {worst}");
+    }
+
+    #[test]
+    fn ifloor_and_iceil_equal_floor_and_ceil() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut xs: Vec<Real> = vec![0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 2.5, 3.0, -3.0, 1e-300, -1e-300, 4095.999999, -4096.0000001, 1e15 + 0.5, -(1e15 + 0.5)];
+        xs.extend((0..100_000).map(|_| rng.random_range(-5000.0..5000.0)));
+        xs.extend((0..1000).map(|k| k as Real * 0.25 - 100.0));
+        for x in xs {
+            assert_eq!(ifloor(x), x.floor() as i64, "floor {x}");
+            assert_eq!(iceil(x), x.ceil() as i64, "ceil {x}");
+        }
     }
 
     #[test]

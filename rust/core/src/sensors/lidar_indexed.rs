@@ -1,8 +1,12 @@
 //! The LIDAR on big maps: walls fetched bucket by bucket from a [`SegmentIndex`], nearest
-//! buckets first. A planar scan skips every bucket whose beams all already hit something
-//! nearer than the bucket, and every wall whose beams all already hit something no farther
-//! than the wall's bounding box (occlusion culling, beam by beam). Same ranges as
-//! [`Lidar::scan_into`] over all walls: culling only skips walls that cannot be seen.
+//! buckets first, as pieces (a wall's part inside a bucket: its beams are those through the
+//! part, its hits those of the whole wall). A planar scan skips every bucket whose beams all
+//! already hit something nearer than the box of its pieces, and every piece whose beams all
+//! already hit something no farther than the piece's box (occlusion culling, beam by beam).
+//! Per bucket, the pieces that face the sensor are picked without branches and their beams
+//! computed side by side before any is swept. Same ranges as [`Lidar::scan_into`] over all
+//! walls (culling only skips walls that cannot be seen), bit for bit but where a beam meets
+//! two walls at a corner and the two scans round differently which is first.
 
 use rand::Rng;
 
@@ -17,9 +21,10 @@ pub(super) struct IndexedScratch {
     /// Bucket offsets `(di, dj)` sorted by a lower bound of their distance, for `key`.
     offsets: Vec<(i32, i32)>,
     key: (u64, u64, i32),
-    /// Per wall: the scan number in which it was swept.
-    seen: Vec<u32>,
-    epoch: u32,
+    /// Per piece of a bucket: its place and squared box distance, if it may be seen.
+    candidates: Vec<(u32, Real)>,
+    /// The beams of each candidate (see [`Lidar::wall_beams`]).
+    beams: Vec<(i64, usize)>,
     /// What the last scan did.
     stats: IndexedScanStats,
 }
@@ -31,11 +36,11 @@ pub struct IndexedScanStats {
     pub buckets: usize,
     /// Of those, skipped as occluded.
     pub buckets_occluded: usize,
-    /// Walls read from those buckets (each once).
+    /// Wall pieces read from those buckets.
     pub walls_visited: usize,
-    /// Walls swept (facing the sensor, in range, not occluded).
+    /// Pieces swept (facing the sensor, in range, not occluded).
     pub walls_swept: usize,
-    /// Walls facing the sensor and in range but skipped as occluded (every beam of theirs
+    /// Pieces facing the sensor and in range but skipped as occluded (every beam of theirs
     /// already hits something nearer).
     pub walls_occluded: usize,
 }
@@ -130,33 +135,22 @@ impl Lidar {
             scratch.offsets = offs.into_iter().map(|(_, i, j)| (i, j)).collect();
             scratch.key = key;
         }
-        let nseg = index.segments().len();
-        if scratch.seen.len() != nseg {
-            scratch.seen = vec![0; nseg];
-            scratch.epoch = 0;
-        }
-        scratch.epoch = scratch.epoch.wrapping_add(1);
-        if scratch.epoch == 0 {
-            scratch.seen.iter_mut().for_each(|v| *v = 0);
-            scratch.epoch = 1;
-        }
         let origin = index.origin();
         let ci = ((sp.x - origin[0]) / cell).floor() as i64;
         let cj = ((sp.y - origin[1]) / cell).floor() as i64;
         let max2 = c.max_range * c.max_range;
         let mut stats = IndexedScanStats::default();
+        let mut cand = std::mem::take(&mut scratch.candidates);
+        let mut beams = std::mem::take(&mut scratch.beams);
         for &(di, dj) in &scratch.offsets {
             let (i, j) = (ci + di as i64, cj + dj as i64);
             if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
                 continue;
             }
-            let ids = index.bucket(i as usize, j as usize);
-            if ids.is_empty() {
+            let (pieces, [x0, y0, x1, y1]) = index.bucket_pieces(i as usize, j as usize);
+            if pieces.is_empty() {
                 continue;
             }
-            let x0 = origin[0] + i as Real * cell;
-            let y0 = origin[1] + j as Real * cell;
-            let (x1, y1) = (x0 + cell, y0 + cell);
             let ddx = (x0 - sp.x).max(0.0).max(sp.x - x1);
             let ddy = (y0 - sp.y).max(0.0).max(sp.y - y1);
             let dmin_b = (ddx * ddx + ddy * ddy).sqrt();
@@ -165,9 +159,9 @@ impl Lidar {
             }
             stats.buckets += 1;
             // occlusion culling, away from the sensor: skip the bucket if every beam through
-            // it already hits something no farther than the bucket's nearest point
-            if planar && dmin_b > 0.5 * cell {
-                // seen from outside, the square spans the angle between its two silhouette
+            // the box of its pieces already hits something no farther than the box
+            if planar && dmin_b > 0.0 {
+                // seen from outside, the box spans the angle between its two silhouette
                 // corners (the others lie between them)
                 let (p, q) = silhouette(sp.x, sp.y, x0, y0, x1, y1);
                 let (a, b) = (to_sensor(p), to_sensor(q));
@@ -178,47 +172,53 @@ impl Lidar {
                     continue;
                 }
             }
-            for (&id, seg) in ids.iter().zip(index.bucket_walls(i as usize, j as usize)) {
-                let st = &mut scratch.seen[id as usize];
-                if *st == scratch.epoch {
-                    continue;
-                }
-                *st = scratch.epoch;
-                stats.walls_visited += 1;
-                if (planar && zs > seg.height) || !seg.faces([sp.x, sp.y]) {
-                    continue;
-                }
-                // squared distance to the wall's bounding box: a lower bound of the wall's
-                // (exact for the axis-aligned walls of grid maps), without division or root
-                let bx = (seg.a[0].min(seg.b[0]) - sp.x).max(0.0).max(sp.x - seg.a[0].max(seg.b[0]));
-                let by = (seg.a[1].min(seg.b[1]) - sp.y).max(0.0).max(sp.y - seg.a[1].max(seg.b[1]));
+            // the pieces that face the sensor, are tall enough and in range, without branches
+            stats.walls_visited += pieces.len();
+            cand.clear();
+            cand.resize(pieces.len(), (0, 0.0));
+            let mut n = 0;
+            for (k, pc) in pieces.iter().enumerate() {
+                let faces = !pc.one_sided | (cross2([pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]], [sp.x - pc.a[0], sp.y - pc.a[1]]) < 0.0);
+                // squared distance to the piece's box: a lower bound of the piece's (exact
+                // for the axis-aligned walls of grid maps), without division or root
+                let bx = (pc.p[0].min(pc.q[0]) - sp.x).max(0.0).max(sp.x - pc.p[0].max(pc.q[0]));
+                let by = (pc.p[1].min(pc.q[1]) - sp.y).max(0.0).max(sp.y - pc.p[1].max(pc.q[1]));
                 let box2 = bx * bx + by * by;
-                if box2 > max2 {
+                cand[n] = (k as u32, box2);
+                n += (faces & !(planar & (zs > pc.height)) & (box2 <= max2)) as usize;
+            }
+            // their beams, side by side (independent, so the divisions and polynomials overlap)
+            beams.clear();
+            beams.extend(cand[..n].iter().map(|&(k, _)| {
+                let pc = &pieces[k as usize];
+                let (p, q) = (to_sensor(pc.p), to_sensor(pc.q));
+                self.wall_beams(p, q, cross2(p, q))
+            }));
+            for (&(k, box2), &(j0, count)) in cand[..n].iter().zip(&beams) {
+                let pc = &pieces[k as usize];
+                let (a, b) = (to_sensor(pc.a), to_sensor(pc.b));
+                let (p, q) = (to_sensor(pc.p), to_sensor(pc.q));
+                if cross2(p, q) == 0.0 {
+                    // collinear with the sensor
+                    stats.walls_swept += 1;
+                    self.sweep_piece(a, b, p, q, pc.height, box2.sqrt(), zs, &mut out.ranges);
                     continue;
                 }
-                let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));
-                let cr = cross2(a, b);
-                if cr == 0.0 {
-                    let d = seg_origin_distance(a, b);
-                    if d <= c.max_range {
-                        stats.walls_swept += 1;
-                        self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
-                    }
-                    continue;
-                }
-                let (j0, count) = self.wall_beams(a, b, cr);
-                // a planar beam that already hits no farther than the wall's box cannot change
+                // a planar beam that already hits no farther than the piece's box cannot change
                 if planar && none_beyond_sq(&out.ranges, j0, count, box2) {
                     stats.walls_occluded += 1;
                     continue;
                 }
-                let d = seg_origin_distance(a, b);
-                if d <= c.max_range {
-                    stats.walls_swept += 1;
-                    self.sweep(a, b, seg.height, j0, count, zs, d, &mut out.ranges);
+                stats.walls_swept += 1;
+                if planar {
+                    self.sweep_flat(a, b, j0, count, &mut out.ranges);
+                } else {
+                    self.sweep(a, b, pc.height, j0, count, zs, box2.sqrt(), &mut out.ranges);
                 }
             }
         }
+        scratch.beams = beams;
+        scratch.candidates = cand;
         scratch.stats = stats;
         self.indexed = scratch;
         self.finish(rng, out);

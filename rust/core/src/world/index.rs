@@ -24,8 +24,11 @@ pub struct SegmentIndex {
     ny: usize,
     starts: Vec<u32>,
     ids: Vec<u32>,
-    /// The walls of `ids`, copied in bucket order so a bucket's walls are contiguous in memory.
-    walls: Vec<Segment>,
+    /// Bucket `b`'s pieces are `pieces[piece_starts[b]..piece_starts[b + 1]]`.
+    piece_starts: Vec<u32>,
+    pieces: Vec<Piece>,
+    /// Per bucket: the box `[x0, y0, x1, y1]` of its pieces.
+    content: Vec<[Real; 4]>,
     stamp: Vec<u32>,
     epoch: u32,
 }
@@ -86,9 +89,29 @@ impl SegmentIndex {
                 }
             }
         }
+        // each wall's part inside each bucket its box touches (none if it only passes by)
+        let mut piece_starts = Vec::with_capacity(nx * ny + 1);
+        let mut pieces = Vec::with_capacity(ids.len());
+        let mut content = Vec::with_capacity(nx * ny);
+        // a wall on a bucket's edge may lie a rounding error outside the computed edge
+        let eps = 1e-9 * (1.0 + lo[0].abs().max(lo[1].abs()) + nx.max(ny) as Real * cell);
+        for b in 0..nx * ny {
+            piece_starts.push(pieces.len() as u32);
+            let (x0, y0) = (lo[0] + (b % nx) as Real * cell - eps, lo[1] + (b / nx) as Real * cell - eps);
+            let cell = cell + 2.0 * eps;
+            let mut bx = [Real::INFINITY, Real::INFINITY, Real::NEG_INFINITY, Real::NEG_INFINITY];
+            for &id in &ids[counts[b] as usize..counts[b + 1] as usize] {
+                let s = segments[id as usize];
+                if let Some((p, q)) = clip(s.a, s.b, [x0, y0], [x0 + cell, y0 + cell]) {
+                    pieces.push(Piece { a: s.a, b: s.b, p, q, height: s.height, one_sided: s.one_sided });
+                    bx = [bx[0].min(p[0]).min(q[0]), bx[1].min(p[1]).min(q[1]), bx[2].max(p[0]).max(q[0]), bx[3].max(p[1]).max(q[1])];
+                }
+            }
+            content.push(bx);
+        }
+        piece_starts.push(pieces.len() as u32);
         let n = segments.len();
-        let walls = ids.iter().map(|&id| segments[id as usize]).collect();
-        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, walls, stamp: vec![0; n], epoch: 0 })
+        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, piece_starts, pieces, content, stamp: vec![0; n], epoch: 0 })
     }
 
     /// All walls.
@@ -118,11 +141,12 @@ impl SegmentIndex {
         &self.ids[self.starts[b] as usize..self.starts[b + 1] as usize]
     }
 
-    /// The walls of bucket `(i, j)`, contiguous, in the order of [`SegmentIndex::bucket`].
+    /// The pieces of the walls in bucket `(i, j)` and the box `[x0, y0, x1, y1]` holding them
+    /// (empty, `x0 > x1`, if there are none).
     #[inline]
-    pub fn bucket_walls(&self, i: usize, j: usize) -> &[Segment] {
+    pub(crate) fn bucket_pieces(&self, i: usize, j: usize) -> (&[Piece], [Real; 4]) {
         let b = j * self.nx + i;
-        &self.walls[self.starts[b] as usize..self.starts[b + 1] as usize]
+        (&self.pieces[self.piece_starts[b] as usize..self.piece_starts[b + 1] as usize], self.content[b])
     }
 
     /// Replaces `out` with every wall in a bucket touched by the square around the disc of
@@ -155,6 +179,42 @@ impl SegmentIndex {
     }
 }
 
+/// A wall's part inside one bucket, for the LIDAR: the whole wall `a b` (hits are computed on
+/// it, so they are the wall's to the last bit) and the part's end points `p q`, in the
+/// direction `a → b`, which bound the beams that can hit it there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Piece {
+    pub a: Point2,
+    pub b: Point2,
+    pub p: Point2,
+    pub q: Point2,
+    pub height: Real,
+    pub one_sided: bool,
+}
+
+/// The part of segment `a b` inside the box `lo`–`hi` (Liang–Barsky), if any; an end inside
+/// is returned as it is.
+fn clip(a: Point2, b: Point2, lo: Point2, hi: Point2) -> Option<(Point2, Point2)> {
+    let (mut t0, mut t1): (Real, Real) = (0.0, 1.0);
+    for k in 0..2 {
+        let e = b[k] - a[k];
+        if e == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return None;
+            }
+        } else {
+            let (u, v) = ((lo[k] - a[k]) / e, (hi[k] - a[k]) / e);
+            t0 = t0.max(u.min(v));
+            t1 = t1.min(u.max(v));
+        }
+    }
+    if t0 > t1 {
+        return None;
+    }
+    let at = |t: Real| if t <= 0.0 { a } else if t >= 1.0 { b } else { [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])] };
+    Some((at(t0), at(t1)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,6 +236,44 @@ mod tests {
                 assert_eq!(near.iter().filter(|s| s == w).count(), 1, "{c:?}");
             }
             assert!(near.iter().all(|s| s.distance_to_point(c) <= 4.0 + 1.5 * 2.0 * std::f64::consts::SQRT_2 + 2.0));
+        }
+    }
+
+    #[test]
+    fn pieces_cover_each_wall_inside_their_buckets() {
+        let mut walls = vec![Segment::new([-5.0, 3.0], [80.0, 3.0], 2.0), Segment::new([0.1, 0.2], [7.3, 9.9], 2.0), Segment::new([4.0, 4.0], [4.0, 1.0], 2.0)];
+        walls.push(Segment::new([2.9, 2.9], [3.1, 3.1], 1.0)); // a bucket corner
+        // on a bucket edge that rounds to above it: -3.9 + 3 * 1.0 = -0.8999999999999999
+        let edge = vec![Segment::new([0.0, -3.9], [30.0, -3.9], 2.0), Segment::new([23.8, -0.9], [30.0, -0.9], 2.0)];
+        for (walls, cell) in [(walls, 1.5), (edge, 1.0)] {
+            check_pieces(&walls, cell);
+        }
+    }
+
+    fn check_pieces(walls: &[Segment], cell: Real) {
+        let idx = SegmentIndex::new(walls.to_vec(), cell).unwrap();
+        let (nx, ny) = idx.dims();
+        for (k, w) in walls.iter().enumerate() {
+            let mut covered = 0.0;
+            for j in 0..ny {
+                for i in 0..nx {
+                    let (pieces, bx) = idx.bucket_pieces(i, j);
+                    let (x0, y0) = (idx.origin()[0] + i as Real * cell, idx.origin()[1] + j as Real * cell);
+                    for pc in pieces.iter().filter(|pc| pc.a == w.a && pc.b == w.b) {
+                        for v in [pc.p, pc.q] {
+                            assert!(v[0] >= x0 - 1e-6 && v[0] <= x0 + cell + 1e-6 && v[1] >= y0 - 1e-6 && v[1] <= y0 + cell + 1e-6, "wall {k}");
+                            assert!(v[0] >= bx[0] && v[0] <= bx[2] && v[1] >= bx[1] && v[1] <= bx[3]);
+                            assert!(w.distance_to_point(v) < 1e-12, "wall {k}: {v:?} off the wall");
+                        }
+                        // same direction as the wall
+                        let (e, f) = ([w.b[0] - w.a[0], w.b[1] - w.a[1]], [pc.q[0] - pc.p[0], pc.q[1] - pc.p[1]]);
+                        assert!(e[0] * f[0] + e[1] * f[1] >= 0.0);
+                        covered += f[0].hypot(f[1]);
+                    }
+                }
+            }
+            // (neighbouring pieces overlap by the clip's rounding allowance, ~1e-7 m)
+            assert!(covered >= w.length() - 1e-9 && covered <= w.length() + 1e-4, "wall {k}: pieces cover {covered} of {}", w.length());
         }
     }
 }

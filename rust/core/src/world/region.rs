@@ -3,10 +3,11 @@
 //! are joined in a union-find, and the start's component is what a 4-connected flood fill
 //! from the start would mark, at a cost of words and runs instead of cells.
 
-use super::bitrow::{extract_runs, pack_free, words_for};
-use super::grid::OccupancyGrid;
+use super::bitrow::{extract_runs, pack_cells, words_for};
+use super::grid::{Cell, OccupancyGrid};
 
-/// The region 4-connected to a start cell through [`super::Cell::Free`] cells.
+/// The region 4-connected to a start cell through open cells ([`Cell::Free`] ones unless
+/// [`FreeRegion::through`] says otherwise).
 #[derive(Debug, Clone)]
 pub(crate) struct FreeRegion {
     width: usize,
@@ -60,14 +61,20 @@ pub(crate) fn run_holding(runs: &[(i32, i32)], i: i32) -> Option<usize> {
 
 impl FreeRegion {
     /// The free cells connected to `(i, j)` (none if that cell is not free).
-    pub(crate) fn new(grid: &OccupancyGrid, (si, sj): (usize, usize)) -> Self {
+    pub(crate) fn new(grid: &OccupancyGrid, start: (usize, usize)) -> Self {
+        Self::through(grid, start, [true, false, false])
+    }
+
+    /// The cells connected to `(i, j)` through open cells, cell `c` being open iff
+    /// `open[c as usize]` (none if `(i, j)` is not open).
+    pub(crate) fn through(grid: &OccupancyGrid, (si, sj): (usize, usize), open: [bool; 3]) -> Self {
         let (w, h) = (grid.width, grid.height);
         let mut packed = vec![0u64; words_for(w)];
         let mut runs = Vec::new();
         let mut row_start = Vec::with_capacity(h + 1);
         for j in 0..h {
             row_start.push(runs.len() as u32);
-            pack_free(grid.row(j), &mut packed);
+            pack_cells(grid.row(j), open, &mut packed);
             extract_runs(&packed, &mut runs);
         }
         row_start.push(runs.len() as u32);
@@ -88,6 +95,20 @@ impl FreeRegion {
         run_holding(&self.runs[a..self.row_start[j + 1] as usize], i as i32).map(|p| a + p)
     }
 
+    /// A grid like `grid` whose region cells are free and all others occupied.
+    pub(crate) fn as_grid(&self, grid: &OccupancyGrid) -> crate::error::Result<OccupancyGrid> {
+        let mut g = OccupancyGrid::new(grid.width, grid.height, grid.resolution, grid.origin, Cell::Occupied)?;
+        for j in 0..self.row_start.len() - 1 {
+            for r in self.row_start[j] as usize..self.row_start[j + 1] as usize {
+                if self.inside[r] {
+                    let (a, b) = self.runs[r];
+                    g.cells[j * self.width + a as usize..=j * self.width + b as usize].fill(Cell::Free);
+                }
+            }
+        }
+        Ok(g)
+    }
+
     /// Whether cell `(i, j)` is in the region (false off the grid).
     pub(crate) fn contains(&self, i: usize, j: usize) -> bool {
         i < self.width && j + 1 < self.row_start.len() && self.run_at(i, j).is_some_and(|r| self.inside[r])
@@ -97,7 +118,7 @@ impl FreeRegion {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::{Cell, Pose2};
+    use crate::world::Pose2;
     use rand::{Rng, SeedableRng};
 
     /// The cell-by-cell 4-connected flood fill.
@@ -142,6 +163,18 @@ mod tests {
                     }
                 }
                 assert!(!region.contains(w, 0) && !region.contains(0, h));
+                // through free and unknown cells: the flood fill of the grid with unknown as free
+                let mut g2 = g.clone();
+                g2.cells.iter_mut().filter(|c| **c == Cell::Unknown).for_each(|c| *c = Cell::Free);
+                let region = FreeRegion::through(&g, s, [true, false, true]);
+                let want = flood(&g2, s);
+                let as_grid = region.as_grid(&g).unwrap();
+                for j in 0..h {
+                    for i in 0..w {
+                        assert_eq!(region.contains(i, j), want[j * w + i], "{w}x{h} cell ({i}, {j}) from {s:?}, through unknown");
+                        assert_eq!(as_grid.get(i, j) == Cell::Free, want[j * w + i]);
+                    }
+                }
             }
         }
     }

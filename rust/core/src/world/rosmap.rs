@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 use super::geometry::Pose2;
 use super::grid::{Cell, OccupancyGrid};
 use super::map::StaticMap;
+use super::region::FreeRegion;
 use super::scenario::Scenario;
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -222,11 +223,15 @@ pub struct RosMapOptions {
     /// unknown rather than occupied cells (Willow Garage); without this the robot and the LIDAR
     /// leak out of the mapped building there.
     pub unknown_is_wall: bool,
+    /// Whether to keep the walls no body or beam from the start's region can reach (those of
+    /// solid pockets and of free space cut off from the start); they change no scan, contact
+    /// or clearance of a robot in that region.
+    pub unreachable_walls: bool,
 }
 
 impl Default for RosMapOptions {
     fn default() -> Self {
-        Self { wall_height: 2.5, unknown_is_wall: true }
+        Self { wall_height: 2.5, unknown_is_wall: true, unreachable_walls: false }
     }
 }
 
@@ -245,7 +250,23 @@ pub fn load_ros_map(yaml: impl AsRef<Path>, options: &RosMapOptions) -> Result<R
     let (start, start_clearance) = interior_start(&grid).ok_or_else(|| Error::map_file(yaml, "map", "no free region inside the building (away from the image border) is wide enough to start in"))?;
     let mut map = StaticMap::new();
     let unknown_is_wall = options.unknown_is_wall;
-    map.segments = grid.wall_segments(options.wall_height, |c| c == Cell::Occupied || (unknown_is_wall && c == Cell::Unknown));
+    let solid = |c: Cell| c == Cell::Occupied || (unknown_is_wall && c == Cell::Unknown);
+    map.segments = if options.unreachable_walls {
+        grid.wall_segments(options.wall_height, solid)
+    } else {
+        let cell = grid.world_to_cell([start.x, start.y]).ok_or_else(|| Error::map_file(yaml, "map", "the start lies off the grid"))?;
+        let region = FreeRegion::through(&grid, cell, [!solid(Cell::Free), !solid(Cell::Occupied), !solid(Cell::Unknown)]);
+        // cells off the region are solid; their edges on the image's border face nothing
+        let (w, h, r) = (grid.width as Real * grid.resolution, grid.height as Real * grid.resolution, grid.resolution);
+        let on_border = |s: &super::Segment| {
+            let (a, b) = (grid.origin.inverse_transform_point(s.a), grid.origin.inverse_transform_point(s.b));
+            let at = |v: Real, edge: Real| (v - edge).abs() < 0.25 * r;
+            (at(a[0], 0.0) && at(b[0], 0.0)) || (at(a[0], w) && at(b[0], w)) || (at(a[1], 0.0) && at(b[1], 0.0)) || (at(a[1], h) && at(b[1], h))
+        };
+        let mut walls = region.as_grid(&grid)?.wall_segments(options.wall_height, |c| c != Cell::Free);
+        walls.retain(|s| !on_border(s));
+        walls
+    };
     let name = yaml.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let scenario = Scenario::new(name, map, start);
     Ok(RosMap { meta, grid, scenario, start_clearance })
