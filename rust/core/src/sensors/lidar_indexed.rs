@@ -98,6 +98,29 @@ impl Lidar {
     /// Ranges are identical to [`Lidar::scan_into`] over the same walls.
     pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
         let sp = self.begin_scan(body, stamp, out)?;
+        #[cfg(target_arch = "x86_64")]
+        if super::lidar::has_avx2() {
+            // SAFETY: the CPU has AVX2 and FMA, checked just above.
+            unsafe { self.sweep_index_avx2(index, extra, sp, out) };
+            self.finish(rng, out);
+            return Ok(());
+        }
+        self.sweep_index(index, extra, sp, out);
+        self.finish(rng, out);
+        Ok(())
+    }
+
+    /// [`Lidar::sweep_index`] built for AVX2 and FMA (same ranges: no fused multiply-add is
+    /// asked for, so none is used).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn sweep_index_avx2(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
+        self.sweep_index(index, extra, sp, out);
+    }
+
+    /// The ranges of [`Lidar::scan_indexed_into`] before limits and noise.
+    #[inline(always)]
+    pub(super) fn sweep_index(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         let c = self.config;
         let kch = c.channels;
         let (s, co) = sp.yaw.sin_cos();
@@ -221,7 +244,5 @@ impl Lidar {
         scratch.candidates = cand;
         scratch.stats = stats;
         self.indexed = scratch;
-        self.finish(rng, out);
-        Ok(())
     }
 }
