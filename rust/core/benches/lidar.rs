@@ -92,19 +92,24 @@ fn bench(c: &mut Criterion) {
             black_box(&scan.ranges);
         })
     });
-    // real maps: fetch the walls near the robot from a bucket index, then scan
+    // real maps (walls of the start's region, as loaded): fetch the walls near the robot
+    // from a bucket index, then scan
     let maps = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps");
-    for (name, yaml) in [("ut_gdc_floor3", "ut_gdc_floor3/3.yaml"), ("willow_garage", "willow_garage/willow-2010-02-18-0.10.yaml")] {
-        let Ok(m) = load_ros_map(maps.join(yaml), &RosMapOptions::default()) else {
-            eprintln!("skipping {name}: {} not found", maps.join(yaml).display());
-            continue;
-        };
-        for (max_range, cell) in [(10.0, 2.0), (20.0, 2.0), (10.0, 1.0), (10.0, 0.5)] {
+    let mut dirs: Vec<_> = std::fs::read_dir(&maps).map(|d| d.flatten().map(|e| e.path()).filter(|p| p.is_dir()).collect()).unwrap_or_default();
+    dirs.sort();
+    if dirs.is_empty() {
+        eprintln!("skipping the real maps: {} not found", maps.display());
+    }
+    for dir in dirs {
+        let name = dir.file_name().unwrap().to_string_lossy().into_owned();
+        let Some(yaml) = std::fs::read_dir(&dir).unwrap().flatten().map(|f| f.path()).find(|p| p.extension().is_some_and(|x| x == "yaml")) else { continue };
+        let m = load_ros_map(&yaml, &RosMapOptions::default()).unwrap();
+        for max_range in [10.0, 20.0] {
             let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range, ..LidarConfig::default() }).unwrap();
-            let index = SegmentIndex::new(m.scenario.map.segments.clone(), cell).unwrap();
+            let index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).unwrap();
             let start = m.scenario.start;
             let mut k = 0;
-            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}_cell{cell}", m.scenario.map.segments.len()), |b| {
+            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}", m.scenario.map.segments.len()), |b| {
                 b.iter(|| {
                     k = (k + 1) % 16;
                     let p = Pose2::new(start.x + 0.05 * k as f64, start.y, 0.3 * k as f64);
