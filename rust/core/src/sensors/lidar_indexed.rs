@@ -170,7 +170,7 @@ impl Lidar {
             if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
                 continue;
             }
-            let (pieces, [x0, y0, x1, y1]) = index.bucket_pieces(i as usize, j as usize);
+            let (pieces, [x0, y0, x1, y1], class_ends) = index.bucket_pieces(i as usize, j as usize);
             if pieces.is_empty() {
                 continue;
             }
@@ -195,20 +195,29 @@ impl Lidar {
                     continue;
                 }
             }
-            // the pieces that face the sensor, are tall enough and in range, without branches
-            stats.walls_visited += pieces.len();
+            // the pieces that face the sensor, are tall enough and in range, without branches;
+            // a class of axis-aligned one-sided pieces that all face away is not read at all
+            // (a wall at x = w facing +x is seen only from x > w ≥ x0, and so on)
+            let away = [sp.x <= x0, sp.x >= x1, sp.y <= y0, sp.y >= y1, false];
             cand.clear();
             cand.resize(pieces.len(), (0, 0.0));
-            let mut n = 0;
-            for (k, pc) in pieces.iter().enumerate() {
-                let faces = !pc.one_sided | (cross2([pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]], [sp.x - pc.a[0], sp.y - pc.a[1]]) < 0.0);
-                // squared distance to the piece's box: a lower bound of the piece's (exact
-                // for the axis-aligned walls of grid maps), without division or root
-                let bx = (pc.p[0].min(pc.q[0]) - sp.x).max(0.0).max(sp.x - pc.p[0].max(pc.q[0]));
-                let by = (pc.p[1].min(pc.q[1]) - sp.y).max(0.0).max(sp.y - pc.p[1].max(pc.q[1]));
-                let box2 = bx * bx + by * by;
-                cand[n] = (k as u32, box2);
-                n += (faces & !(planar & (zs > pc.height)) & (box2 <= max2)) as usize;
+            let (mut n, mut from) = (0, 0);
+            for (class, &away) in away.iter().enumerate() {
+                let to = class_ends.get(class).map_or(pieces.len(), |&e| e as usize);
+                if !away {
+                    stats.walls_visited += to - from;
+                    for (k, pc) in pieces.iter().enumerate().take(to).skip(from) {
+                        let faces = !pc.one_sided | (cross2([pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]], [sp.x - pc.a[0], sp.y - pc.a[1]]) < 0.0);
+                        // squared distance to the piece's box: a lower bound of the piece's
+                        // (exact for the axis-aligned walls of grid maps), without division or root
+                        let bx = (pc.p[0].min(pc.q[0]) - sp.x).max(0.0).max(sp.x - pc.p[0].max(pc.q[0]));
+                        let by = (pc.p[1].min(pc.q[1]) - sp.y).max(0.0).max(sp.y - pc.p[1].max(pc.q[1]));
+                        let box2 = bx * bx + by * by;
+                        cand[n] = (k as u32, box2);
+                        n += (faces & !(planar & (zs > pc.height)) & (box2 <= max2)) as usize;
+                    }
+                }
+                from = to;
             }
             // their beams, side by side (independent, so the divisions and polynomials overlap)
             beams.clear();

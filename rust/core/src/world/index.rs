@@ -29,6 +29,8 @@ pub struct SegmentIndex {
     pieces: Vec<Piece>,
     /// Per bucket: the box `[x0, y0, x1, y1]` of its pieces.
     content: Vec<[Real; 4]>,
+    /// Per bucket: where each [`Facing`] class of its pieces ends (they are sorted by class).
+    class_ends: Vec<[u32; 4]>,
     stamp: Vec<u32>,
     epoch: u32,
 }
@@ -93,6 +95,7 @@ impl SegmentIndex {
         let mut piece_starts = Vec::with_capacity(nx * ny + 1);
         let mut pieces = Vec::with_capacity(ids.len());
         let mut content = Vec::with_capacity(nx * ny);
+        let mut class_ends = Vec::with_capacity(nx * ny);
         // a wall on a bucket's edge may lie a rounding error outside the computed edge
         let eps = 1e-9 * (1.0 + lo[0].abs().max(lo[1].abs()) + nx.max(ny) as Real * cell);
         for b in 0..nx * ny {
@@ -108,10 +111,18 @@ impl SegmentIndex {
                 }
             }
             content.push(bx);
+            let start = *piece_starts.last().unwrap() as usize;
+            let mine = &mut pieces[start..];
+            mine.sort_by_key(|pc| Facing::of(pc) as u8);
+            let mut ends = [0u32; 4];
+            for (c, end) in ends.iter_mut().enumerate() {
+                *end = mine.partition_point(|pc| (Facing::of(pc) as usize) <= c) as u32;
+            }
+            class_ends.push(ends);
         }
         piece_starts.push(pieces.len() as u32);
         let n = segments.len();
-        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, piece_starts, pieces, content, stamp: vec![0; n], epoch: 0 })
+        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, piece_starts, pieces, content, class_ends, stamp: vec![0; n], epoch: 0 })
     }
 
     /// All walls.
@@ -141,12 +152,13 @@ impl SegmentIndex {
         &self.ids[self.starts[b] as usize..self.starts[b + 1] as usize]
     }
 
-    /// The pieces of the walls in bucket `(i, j)` and the box `[x0, y0, x1, y1]` holding them
-    /// (empty, `x0 > x1`, if there are none).
+    /// The pieces of the walls in bucket `(i, j)`, the box `[x0, y0, x1, y1]` holding them
+    /// (empty, `x0 > x1`, if there are none), and where each [`Facing`] class among them ends
+    /// (sorted by class; the last, [`Facing::Any`], ends with the slice).
     #[inline]
-    pub(crate) fn bucket_pieces(&self, i: usize, j: usize) -> (&[Piece], [Real; 4]) {
+    pub(crate) fn bucket_pieces(&self, i: usize, j: usize) -> (&[Piece], [Real; 4], [u32; 4]) {
         let b = j * self.nx + i;
-        (&self.pieces[self.piece_starts[b] as usize..self.piece_starts[b + 1] as usize], self.content[b])
+        (&self.pieces[self.piece_starts[b] as usize..self.piece_starts[b + 1] as usize], self.content[b], self.class_ends[b])
     }
 
     /// Replaces `out` with every wall in a bucket touched by the square around the disc of
@@ -190,6 +202,38 @@ pub(crate) struct Piece {
     pub q: Point2,
     pub height: Real,
     pub one_sided: bool,
+}
+
+/// Which side a piece can be seen from, for skipping a bucket's back faces wholesale: the
+/// free side of a one-sided axis-aligned wall (solid on the left of `a → b`, seen from points
+/// strictly on its right), or any side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub(crate) enum Facing {
+    /// Seen only from `x` greater than the wall's.
+    PlusX = 0,
+    /// Only from smaller `x`.
+    MinusX = 1,
+    /// Only from greater `y`.
+    PlusY = 2,
+    /// Only from smaller `y`.
+    MinusY = 3,
+    /// Two-sided, slanted or a point: decided per piece.
+    Any = 4,
+}
+
+impl Facing {
+    /// The class of `pc`.
+    pub(crate) fn of(pc: &Piece) -> Self {
+        let (dx, dy) = (pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]);
+        match (pc.one_sided, dx == 0.0, dy == 0.0) {
+            (true, true, false) if dy > 0.0 => Facing::PlusX,
+            (true, true, false) => Facing::MinusX,
+            (true, false, true) if dx < 0.0 => Facing::PlusY,
+            (true, false, true) => Facing::MinusY,
+            _ => Facing::Any,
+        }
+    }
 }
 
 /// The part of segment `a b` inside the box `lo`–`hi` (Liang–Barsky), if any; an end inside
@@ -250,6 +294,37 @@ mod tests {
         }
     }
 
+    #[test]
+    fn facing_classes_agree_with_faces() {
+        let walls = vec![
+            Segment::one_sided([0.0, 0.0], [0.0, 2.0], 1.0),
+            Segment::one_sided([1.0, 2.0], [1.0, 0.0], 1.0),
+            Segment::one_sided([0.0, 3.0], [2.0, 3.0], 1.0),
+            Segment::one_sided([2.0, 4.0], [0.0, 4.0], 1.0),
+            Segment::one_sided([0.0, 5.0], [1.0, 6.0], 1.0),
+            Segment::new([0.0, 7.0], [1.0, 7.0], 1.0),
+        ];
+        let want = [Facing::PlusX, Facing::MinusX, Facing::MinusY, Facing::PlusY, Facing::Any, Facing::Any];
+        for (w, f) in walls.iter().zip(want) {
+            let pc = Piece { a: w.a, b: w.b, p: w.a, q: w.b, height: 1.0, one_sided: w.one_sided };
+            assert_eq!(Facing::of(&pc), f, "{w:?}");
+            let mid = [(w.a[0] + w.b[0]) / 2.0, (w.a[1] + w.b[1]) / 2.0];
+            let seen = |d: [Real; 2]| w.faces([mid[0] + d[0], mid[1] + d[1]]);
+            match f {
+                Facing::PlusX => assert!(seen([0.1, 0.0]) && !seen([-0.1, 0.0]) && !seen([0.0, 0.5])),
+                Facing::MinusX => assert!(seen([-0.1, 0.0]) && !seen([0.1, 0.0])),
+                Facing::PlusY => assert!(seen([0.0, 0.1]) && !seen([0.0, -0.1])),
+                Facing::MinusY => assert!(seen([0.0, -0.1]) && !seen([0.0, 0.1])),
+                Facing::Any => {}
+            }
+        }
+        // sorted by class within each bucket, with the class ends
+        let idx = SegmentIndex::new(walls, 10.0).unwrap();
+        let (pieces, _, ends) = idx.bucket_pieces(0, 0);
+        assert_eq!(ends, [1, 2, 3, 4]);
+        assert!(pieces.windows(2).all(|w| Facing::of(&w[0]) as u8 <= Facing::of(&w[1]) as u8));
+    }
+
     fn check_pieces(walls: &[Segment], cell: Real) {
         let idx = SegmentIndex::new(walls.to_vec(), cell).unwrap();
         let (nx, ny) = idx.dims();
@@ -257,7 +332,7 @@ mod tests {
             let mut covered = 0.0;
             for j in 0..ny {
                 for i in 0..nx {
-                    let (pieces, bx) = idx.bucket_pieces(i, j);
+                    let (pieces, bx, _) = idx.bucket_pieces(i, j);
                     let (x0, y0) = (idx.origin()[0] + i as Real * cell, idx.origin()[1] + j as Real * cell);
                     for pc in pieces.iter().filter(|pc| pc.a == w.a && pc.b == w.b) {
                         for v in [pc.p, pc.q] {
