@@ -409,48 +409,40 @@ impl Lidar {
         }
     }
 
-    /// [`Lidar::sweep`] for a planar ring, without branches but for walls parallel to a beam:
-    /// over contiguous runs of beams, so that the divisions run several to an instruction.
+    /// [`Lidar::sweep`] for a planar ring, without branches but for walls parallel to a beam;
+    /// more than a few beams go over contiguous runs, so that the divisions run several to an
+    /// instruction.
     #[inline]
     pub(super) fn sweep_flat(&self, a: [Real; 2], b: [Real; 2], j0: i64, count: usize, best: &mut [Real]) {
         let n = self.config.columns;
         let i0 = (j0 & (n as i64 - 1)) as usize;
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let ae = cross2(a, e);
+        let mut parallel = false;
         if count <= 8 {
-            // a few beams: one by one, without setting up runs
-            let e = [b[0] - a[0], b[1] - a[1]];
-            let ae = cross2(a, e);
             let mut i = i0;
             for _ in 0..count {
-                let (dc, ds) = (self.az_cos[i], self.az_sin[i]);
-                let den = dc * e[1] - ds * e[0];
-                let sn = a[0] * ds - a[1] * dc;
-                let cur = best[i];
-                best[i] = if den == 0.0 {
-                    ray_segment_distance([0.0, 0.0], [dc, ds], a, b).map_or(cur, |t| t.min(cur))
-                } else {
-                    let hit = (den > 0.0) & (ae >= 0.0) & (sn >= 0.0) & (sn <= den) | (den < 0.0) & (ae <= 0.0) & (sn <= 0.0) & (sn >= den);
-                    let t = ae / den;
-                    if hit & (t < cur) {
-                        t
-                    } else {
-                        cur
-                    }
-                };
+                let (r, par) = flat_beam(a, e, ae, self.az_cos[i], self.az_sin[i], best[i]);
+                best[i] = r;
+                parallel |= par;
                 i = (i + 1) & (n - 1);
             }
-            return;
-        }
-        let first = count.min(n - i0);
-        let mut parallel = self.sweep_run(a, b, i0..i0 + first, best);
-        if count > first {
-            parallel |= self.sweep_run(a, b, 0..count - first, best);
+        } else {
+            let first = count.min(n - i0);
+            for run in [i0..i0 + first, 0..count - first] {
+                let beams = self.az_cos[run.clone()].iter().zip(&self.az_sin[run.clone()]);
+                for ((&dc, &ds), cur) in beams.zip(&mut best[run]) {
+                    let (r, par) = flat_beam(a, e, ae, dc, ds, *cur);
+                    *cur = r;
+                    parallel |= par;
+                }
+            }
         }
         if parallel {
             // a beam parallel to the wall (rare): the general test for those beams
             for k in 0..count {
                 let i = (i0 + k) & (n - 1);
                 let (dc, ds) = (self.az_cos[i], self.az_sin[i]);
-                let e = [b[0] - a[0], b[1] - a[1]];
                 if dc * e[1] - ds * e[0] == 0.0 {
                     if let Some(t) = ray_segment_distance([0.0, 0.0], [dc, ds], a, b) {
                         best[i] = best[i].min(t);
@@ -458,26 +450,6 @@ impl Lidar {
                 }
             }
         }
-    }
-
-    /// The beams `run` of [`Lidar::sweep_flat`]; whether one of them is parallel to the wall
-    /// (and left for the caller).
-    #[inline(always)]
-    fn sweep_run(&self, a: [Real; 2], b: [Real; 2], run: std::ops::Range<usize>, best: &mut [Real]) -> bool {
-        let e = [b[0] - a[0], b[1] - a[1]];
-        let ae = cross2(a, e);
-        let mut parallel = false;
-        let beams = self.az_cos[run.clone()].iter().zip(&self.az_sin[run.clone()]);
-        for ((&dc, &ds), cur) in beams.zip(&mut best[run]) {
-            let den = dc * e[1] - ds * e[0];
-            let sn = a[0] * ds - a[1] * dc;
-            // the same test and the same quotient as `sweep`
-            let hit = (den > 0.0) & (ae >= 0.0) & (sn >= 0.0) & (sn <= den) | (den < 0.0) & (ae <= 0.0) & (sn <= 0.0) & (sn >= den);
-            let t = ae / den;
-            *cur = if hit & (t < *cur) { t } else { *cur };
-            parallel |= den == 0.0;
-        }
-        parallel
     }
 
     /// Applies range limits, noise and dropout, and fills the body-frame points.
@@ -526,6 +498,18 @@ impl Lidar {
             }));
         }
     }
+}
+
+/// One beam `(dc, ds)` of [`Lidar::sweep_flat`] against the wall from `a` along `e` (`ae =
+/// a × e`), nearest range so far `cur`: the new nearest range (the same test and quotient as
+/// [`Lidar::sweep`]), and whether the beam is parallel to the wall (then left unchanged).
+#[inline(always)]
+fn flat_beam(a: [Real; 2], e: [Real; 2], ae: Real, dc: Real, ds: Real, cur: Real) -> (Real, bool) {
+    let den = dc * e[1] - ds * e[0];
+    let sn = a[0] * ds - a[1] * dc;
+    let hit = (den > 0.0) & (ae >= 0.0) & (sn >= 0.0) & (sn <= den) | (den < 0.0) & (ae <= 0.0) & (sn <= 0.0) & (sn >= den);
+    let t = ae / den;
+    (if hit & (t < cur) { t } else { cur }, den == 0.0)
 }
 
 /// Whether this CPU runs AVX2 and FMA (checked once, then cached by the standard library).
