@@ -23,8 +23,9 @@ pub(super) struct IndexedScratch {
     key: (u64, u64, i32),
     /// Per piece of a bucket: its place and squared box distance, if it may be seen.
     candidates: Vec<(u32, Real)>,
-    /// The beams of each candidate (see [`Lidar::wall_beams`]).
-    beams: Vec<(i64, usize)>,
+    /// The beams of each candidate (see [`Lidar::wall_beams`]) and whether it is collinear
+    /// with the sensor.
+    beams: Vec<(i64, usize, bool)>,
     /// What the last scan did.
     stats: IndexedScanStats,
 }
@@ -224,15 +225,16 @@ impl Lidar {
             beams.extend(cand[..n].iter().map(|&(k, _)| {
                 let pc = &pieces[k as usize];
                 let (p, q) = (to_sensor(pc.p), to_sensor(pc.q));
-                self.wall_beams(p, q, cross2(p, q))
+                let cr = cross2(p, q);
+                let (j0, count) = self.wall_beams(p, q, cr);
+                (j0, count, cr == 0.0)
             }));
-            for (&(k, box2), &(j0, count)) in cand[..n].iter().zip(&beams) {
+            for (&(k, box2), &(j0, count, collinear)) in cand[..n].iter().zip(&beams) {
                 let pc = &pieces[k as usize];
-                let (a, b) = (to_sensor(pc.a), to_sensor(pc.b));
-                let (p, q) = (to_sensor(pc.p), to_sensor(pc.q));
-                if cross2(p, q) == 0.0 {
-                    // collinear with the sensor
+                if collinear {
+                    // collinear with the sensor (its beams above are not used)
                     stats.walls_swept += 1;
+                    let (a, b, p, q) = (to_sensor(pc.a), to_sensor(pc.b), to_sensor(pc.p), to_sensor(pc.q));
                     self.sweep_piece(a, b, p, q, pc.height, box2.sqrt(), zs, &mut out.ranges);
                     continue;
                 }
@@ -242,6 +244,7 @@ impl Lidar {
                     continue;
                 }
                 stats.walls_swept += 1;
+                let (a, b) = (to_sensor(pc.a), to_sensor(pc.b));
                 if planar {
                     self.sweep_flat(a, b, j0, count, &mut out.ranges);
                 } else {
