@@ -55,7 +55,7 @@ def test_view_reference_in_a_narrow_corridor_is_one_the_shield_admits(width):
 
 def test_scripted_agent_inspects_procedural_sites_under_the_composite_shield():
     coverage, contacts = [], 0
-    for seed in range(6):
+    for seed in range(12):
         env = gym.make("shieldnav/CorridorInspection-v0", truncate_on_deadlock=True)
         agent = InspectionAgent(env)
         obs, info = env.reset(seed=seed)
@@ -69,12 +69,13 @@ def test_scripted_agent_inspects_procedural_sites_under_the_composite_shield():
         contacts += s["collisions"]
         if s["coverage"] < 0.02:
             # stuck at the start: only where the paper's shield itself refuses every command
-            # (a 1.0-1.2 m corridor: H < 0 from the first scan, see the README's sweep)
-            assert s["shield_infeasible_steps"] >= 0.9 * s["steps"], (seed, s)
+            # (a 1.0-1.2 m corridor: H < 0 from the first scan, see the README's sweep; where H
+            # hovers at 0 the range noise lets a few steps through)
+            assert s["shield_infeasible_steps"] >= 0.8 * s["steps"], (seed, s)
     assert contacts == 0
     # the paper's reference held until reached left the robot at its start (coverage ~1 %)
     assert np.median(coverage) > 0.1, coverage
-    assert sum(c > 0.1 for c in coverage) >= 4, coverage
+    assert sum(c > 0.1 for c in coverage) >= 8, coverage
 
 
 def test_agent_options_are_checked():

@@ -25,7 +25,7 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::noise::standard_normal;
+use super::noise::{fill_standard_normal, fill_unit_uniform};
 use super::ray_segment::ray_segment_distance;
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -182,6 +182,8 @@ pub struct Lidar {
     order: Vec<u64>,
     /// Scratch of [`Lidar::scan_indexed_into`].
     pub(super) indexed: super::lidar_indexed::IndexedScratch,
+    /// Scratch of the noise and dropout draws.
+    draws: Vec<Real>,
 }
 
 impl Lidar {
@@ -203,6 +205,7 @@ impl Lidar {
             visible: Vec::new(),
             order: Vec::new(),
             indexed: Default::default(),
+            draws: Vec::new(),
         })
     }
 
@@ -453,33 +456,34 @@ impl Lidar {
     }
 
     /// Applies range limits, noise and dropout, and fills the body-frame points.
-    pub(super) fn finish<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut Scan) {
-        let c = &self.config;
-        let n = c.columns;
-        let (ms, mc) = c.mount.yaw.sin_cos();
+    ///
+    /// The draws: with noise, one standard normal per beam, in beam order (channel-major),
+    /// whether or not the beam returns; then, with dropout, one uniform per beam. A fixed
+    /// count per scan, drawn as blocks (see [`super::noise`]).
+    pub(super) fn finish<R: Rng + ?Sized>(&mut self, rng: &mut R, out: &mut Scan) {
+        let c = self.config;
         let (lo, hi) = (c.min_range, c.max_range);
         let in_range = |r: Real| r >= lo && r <= hi;
-        if c.range_noise_std == 0.0 && c.dropout == 0.0 {
-            // no draws: the range limits alone, without branches
-            out.ranges.iter_mut().for_each(|r| *r = if in_range(*r) { *r } else { Real::INFINITY });
+        let n = out.ranges.len();
+        if c.range_noise_std > 0.0 {
+            self.draws.resize(n, 0.0);
+            fill_standard_normal(rng, &mut self.draws);
+            let sd = c.range_noise_std;
+            // a return out of range stays out; a noisy one that leaves the range is dropped
+            out.ranges.iter_mut().zip(&self.draws).for_each(|(r, z)| {
+                let noisy = *r + sd * z;
+                *r = if in_range(*r) & in_range(noisy) { noisy } else { Real::INFINITY };
+            });
         } else {
-            // the draws, in beam order, only for returns in range (as the RNG stream requires)
-            for r in out.ranges.iter_mut() {
-                if !in_range(*r) {
-                    *r = Real::INFINITY;
-                    continue;
-                }
-                if c.range_noise_std > 0.0 {
-                    *r += c.range_noise_std * standard_normal(rng);
-                    if !in_range(*r) {
-                        *r = Real::INFINITY;
-                    }
-                }
-                if c.dropout > 0.0 && rng.random::<Real>() < c.dropout {
-                    *r = Real::INFINITY;
-                }
-            }
+            out.ranges.iter_mut().for_each(|r| *r = if in_range(*r) { *r } else { Real::INFINITY });
         }
+        if c.dropout > 0.0 {
+            self.draws.resize(n, 0.0);
+            fill_unit_uniform(rng, &mut self.draws);
+            out.ranges.iter_mut().zip(&self.draws).for_each(|(r, u)| *r = if *u < c.dropout { Real::INFINITY } else { *r });
+        }
+        let (ms, mc) = c.mount.yaw.sin_cos();
+        let n = c.columns;
         // the points, without branches (several beams at once)
         out.points.clear();
         out.points.reserve(out.ranges.len());
