@@ -6,7 +6,8 @@ mod common;
 use common::{random_scan, rng, rot_rpy};
 use rand::Rng;
 use shieldnav_core::shield::{
-    project_halfspace_box, solve_rows, BodyState, LinearConstraints, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod,
+    move_points, project_halfspace_box, solve_rows, BodyState, LinearConstraints, Motion, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod,
+    SimdLevel,
 };
 
 fn shield(method: ShieldMethod) -> Shield {
@@ -178,6 +179,49 @@ fn crop_band_and_downsampling_count_points() {
     let mut vox = Shield::new(ShieldConfig { scan: ScanFilter { voxel_size: Some(0.5), ..ScanFilter::default() }, ..ShieldConfig::default() }).unwrap();
     let ov = vox.filter(&scan, &state, &[0.0, 0.0]).unwrap();
     assert!(ov.num_points < o.num_points && ov.h_min == o.h_min);
+}
+
+/// A scan moved by a [`Motion`] filters exactly as its points moved beforehand: in the
+/// composite kernel (each SIMD level, f32 and f64, strides 2 and 3), through down-sampling, and
+/// for the baselines. The moved points differ from the raw ones, so the motion is not ignored.
+#[test]
+fn a_moved_scan_filters_as_its_moved_points() {
+    let mut g = rng(23);
+    let raw = random_scan(&mut g, 3_001, 3, 4.0);
+    let m = Motion::planar(0.31, -0.12, 0.07);
+    let state = BodyState::planar(0.0, 0.4).unwrap();
+    let u_nom = [1.2, -0.3];
+    let mut levels = vec![SimdLevel::Portable];
+    levels.extend([SimdLevel::Avx2, SimdLevel::Avx512].into_iter().filter(|l| l.is_supported()));
+    let configs = [
+        ShieldConfig::default(),
+        ShieldConfig { scan: ScanFilter { angular_bins: Some(360), ..ScanFilter::default() }, ..ShieldConfig::default() },
+        ShieldConfig { method: ShieldMethod::Distance, ..ShieldConfig::default() },
+        ShieldConfig { method: ShieldMethod::HardMin, ..ShieldConfig::default() },
+    ];
+    for stride in [2, 3] {
+        let pts64: Vec<f64> = raw.chunks(3).flat_map(|c| c[..stride].to_vec()).collect();
+        let pts32: Vec<f32> = pts64.iter().map(|&v| v as f32).collect();
+        let (mut moved64, mut moved32) = (Vec::new(), Vec::new());
+        move_points(&pts64, stride, &m, &mut moved64);
+        move_points(&pts32, stride, &m, &mut moved32);
+        for cfg in &configs {
+            for &level in &levels {
+                let mut s = Shield::new(cfg.clone()).unwrap().with_simd_level(level).unwrap();
+                let a = s.filter(&Scan::new_f64(&pts64, stride).unwrap().moved(m), &state, &u_nom).unwrap();
+                let b = s.filter(&Scan::new_f64(&moved64, stride).unwrap(), &state, &u_nom).unwrap();
+                let raw_h = s.filter(&Scan::new_f64(&pts64, stride).unwrap(), &state, &u_nom).unwrap().h_min;
+                assert_eq!((a.value, a.h_min, a.u, a.num_points), (b.value, b.h_min, b.u, b.num_points), "f64 {stride} {:?} {level:?}", cfg.method);
+                assert_ne!(a.h_min, raw_h);
+                let a = s.filter(&Scan::new_f32(&pts32, stride).unwrap().moved(m), &state, &u_nom).unwrap();
+                let b = s.filter(&Scan::new_f32(&moved32, stride).unwrap(), &state, &u_nom).unwrap();
+                assert_eq!((a.value, a.h_min, a.u, a.num_points), (b.value, b.h_min, b.u, b.num_points), "f32 {stride} {:?} {level:?}", cfg.method);
+            }
+        }
+    }
+    let bad = Motion { tx: f64::NAN, ..m };
+    let e = Shield::new(ShieldConfig::default()).unwrap().filter(&Scan::new_f64(&raw, 3).unwrap().moved(bad), &state, &u_nom).unwrap_err();
+    assert!(e.to_string().contains("motion"), "{e}");
 }
 
 #[test]

@@ -202,7 +202,8 @@ impl PyEpisode {
     /// of `valid_points()` that can lie inside its crop radius.
     fn shield_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let p = self.inner.shield_points();
-        PyArray1::from_slice(py, p).reshape([p.len() / 3, 3])
+        let n = p.len() / 3;
+        PyArray1::from_vec(py, p).reshape([n, 3])
     }
 
     /// Totals of the episode so far.

@@ -8,7 +8,7 @@ use crate::control::{NominalController, NominalControllerConfig};
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::planner::ViewPlannerConfig;
-use crate::shield::{BodyState, Scan as PointScan, Shield, ShieldConfig, ShieldOutcome};
+use crate::shield::{move_points, BodyState, Motion, Scan as PointScan, Shield, ShieldConfig, ShieldOutcome};
 use crate::world::generate::{generate, GeneratorConfig};
 use crate::world::{preset, wrap_angle, Pose2, Scenario, World, WorldConfig};
 
@@ -222,11 +222,12 @@ pub struct Episode {
     deadlock: DeadlockMonitor,
     cos_el: Vec<Real>,
     /// The valid returns of the latest scan (its body frame) that can lie inside the shield's
-    /// crop radius until the next scan (range at most `crop + near_margin`).
-    near: Vec<[Real; 3]>,
+    /// crop radius until the next scan (range at most `crop + near_margin`), `f32` rows
+    /// `[x, y, z]`.
+    near: Vec<f32>,
     near_margin: Real,
-    /// Those returns moved into the current body frame, `[x, y, z]` rows, for the shield.
-    shield_points: Vec<f32>,
+    /// The motion from the scan's body frame to the current one.
+    motion: Motion,
     /// The range bins of the latest scan (the observation's first block).
     bins: Vec<f32>,
     last_estimate: Pose2,
@@ -319,7 +320,7 @@ impl Episode {
             cos_el,
             near: Vec::new(),
             near_margin: 0.0,
-            shield_points: Vec::new(),
+            motion: Motion::planar(0.0, 0.0, 0.0),
             bins: Vec::new(),
             last_estimate: Pose2::default(),
             estimate_change: Pose2::default(),
@@ -429,10 +430,11 @@ impl Episode {
         let scan = self.world.scan();
         let limit = self.config.shield.scan.crop_radius.map_or(Real::INFINITY, |c| c + self.near_margin);
         self.near.clear();
-        self.near.extend(scan.points.iter().zip(&scan.ranges).filter(|(p, r)| !p[0].is_nan() && **r <= limit).map(|(p, _)| *p));
+        self.near.extend(scan.points.iter().zip(&scan.ranges).filter(|(p, r)| !p[0].is_nan() && **r <= limit).flat_map(|(p, _)| p.map(|v| v as f32)));
     }
 
-    /// Moves the returns the shield may need into the current body frame (`f32` rows).
+    /// The motion that takes the kept returns (scan frame) into the current body frame; the
+    /// shield applies it in its kernel.
     fn compensate_points(&mut self) {
         let rel = self.since_scan();
         if rel.x.hypot(rel.y) > self.near_margin {
@@ -440,13 +442,7 @@ impl Episode {
             self.near_margin = 2.0 * rel.x.hypot(rel.y);
             self.select_near();
         }
-        let (s, c) = rel.yaw.sin_cos();
-        self.shield_points.resize(3 * self.near.len(), 0.0);
-        for (o, p) in self.shield_points.chunks_exact_mut(3).zip(&self.near) {
-            o[0] = (rel.x + c * p[0] - s * p[1]) as f32;
-            o[1] = (rel.y + s * p[0] + c * p[1]) as f32;
-            o[2] = p[2] as f32;
-        }
+        self.motion = Motion::planar(rel.yaw, rel.x, rel.y);
     }
 
     /// One control period: `action` (in `[-1, 1]³`, read by the action mode) → `u_nom` →
@@ -463,7 +459,7 @@ impl Episode {
         )?;
         let w_max = self.config.world.tracker.w_max;
         let omega = u_nom[2].clamp(-w_max, w_max);
-        let scan = PointScan::new_f32(&self.shield_points, 3)?;
+        let scan = PointScan::new_f32(&self.near, 3)?.moved(self.motion);
         let out = self
             .shield
             .filter(&scan, &BodyState::planar(0.0, omega)?, &u_nom[..2])?;
@@ -598,8 +594,10 @@ impl Episode {
 
     /// The returns the shield sees this step (`f32` rows `[x, y, z]`, current body frame):
     /// those of [`Episode::points`] that can lie inside its crop radius.
-    pub fn shield_points(&self) -> &[f32] {
-        &self.shield_points
+    pub fn shield_points(&self) -> Vec<f32> {
+        let mut out = Vec::new();
+        move_points(&self.near, 3, &self.motion, &mut out);
+        out
     }
 
     /// The world.

@@ -98,6 +98,47 @@ pub struct CompositeParams {
     pub omega: Vec3,
 }
 
+/// A planar rigid motion of the points, applied before use: the points were measured in an
+/// earlier body frame whose pose in the current one is `(tx, ty, yaw)`. Each point becomes
+/// `x' = tx + (cos·x − sin·y)`, `y' = ty + (sin·x + cos·y)`, `z' = z`, computed in the points'
+/// own precision (so [`Motion::apply`] on the same numbers gives the same coordinates).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion {
+    /// `cos yaw`.
+    pub cos: f64,
+    /// `sin yaw`.
+    pub sin: f64,
+    /// Translation, x (m).
+    pub tx: f64,
+    /// Translation, y (m).
+    pub ty: f64,
+}
+
+impl Motion {
+    /// The motion by `yaw` (rad) and then `(tx, ty)` (m).
+    pub fn planar(yaw: f64, tx: f64, ty: f64) -> Self {
+        let (sin, cos) = yaw.sin_cos();
+        Self { cos, sin, tx, ty }
+    }
+
+    /// Whether every number is finite.
+    pub fn is_finite(&self) -> bool {
+        [self.cos, self.sin, self.tx, self.ty].iter().all(|v| v.is_finite())
+    }
+
+    /// `(x', y')` of the point `(x, y)`, in `T` (the motion's numbers rounded to `T`).
+    #[inline(always)]
+    pub fn apply<T: Lane>(&self, x: T, y: T) -> (T, T) {
+        moved(T::from_f64(self.cos), T::from_f64(self.sin), T::from_f64(self.tx), T::from_f64(self.ty), x, y)
+    }
+}
+
+/// The motion's formula, on numbers already in `T`.
+#[inline(always)]
+fn moved<T: Lane>(c: T, s: T, tx: T, ty: T, x: T, y: T) -> (T, T) {
+    (tx + (c * x - s * y), ty + (s * x + c * y))
+}
+
 #[derive(Clone, Copy)]
 struct Coeffs<T> {
     ia: T,
@@ -111,6 +152,11 @@ struct Coeffs<T> {
     kappa: T,
     /// `κ log₂e`: the weights are computed as powers of two.
     kappa2: T,
+    /// The points' [`Motion`]: cosine, sine, translation.
+    mc: T,
+    ms: T,
+    tx: T,
+    ty: T,
 }
 
 /// Raw sums of the second pass, reduced across lanes in `f64`.
@@ -186,8 +232,9 @@ impl<T: Lane, const L: usize> Acc<T, L> {
     /// Folds one point into lane `j`. With `SUMS = false` only `min h`, the count and the
     /// finiteness check run (the first pass of the two-pass mode).
     #[inline(always)]
-    fn add<const S: usize, const D: usize, const F: bool, const SUMS: bool, const FIXED: bool>(&mut self, j: usize, p: &[T], k: &Coeffs<T>, shift: T) {
+    fn add<const S: usize, const D: usize, const F: bool, const SUMS: bool, const FIXED: bool, const M: bool>(&mut self, j: usize, p: &[T], k: &Coeffs<T>, shift: T) {
         let (x, y, z) = coords::<T, S>(p);
+        let (x, y) = if M { moved(k.mc, k.ms, k.tx, k.ty, x, y) } else { (x, y) };
         let (m, h) = mask_h::<T, S, D>(x, y, z, k);
         // `h` is NaN or inf whenever a coordinate it uses is (or is too large to square);
         // the planar height band also reads `z`.
@@ -242,7 +289,7 @@ impl<T: Lane, const L: usize> Acc<T, L> {
 
 /// One pass over the scan in blocks of `L` points.
 #[inline(always)]
-fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const SUMS: bool, const FIXED: bool>(
+fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const SUMS: bool, const FIXED: bool, const M: bool>(
     pts: &[T],
     k: &Coeffs<T>,
     shift: T,
@@ -252,11 +299,11 @@ fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, 
     let tail = blocks.remainder();
     for block in blocks {
         for j in 0..L {
-            acc.add::<S, D, F, SUMS, FIXED>(j, &block[j * S..j * S + S], k, shift);
+            acc.add::<S, D, F, SUMS, FIXED, M>(j, &block[j * S..j * S + S], k, shift);
         }
     }
     for p in tail.chunks_exact(S) {
-        acc.add::<S, D, F, SUMS, FIXED>(0, p, k, shift);
+        acc.add::<S, D, F, SUMS, FIXED, M>(0, p, k, shift);
     }
     acc.finish()
 }
@@ -265,51 +312,51 @@ fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, 
 /// `κ` (≥ every `−κ tanh(·)`) in one fused pass when `κ ≤ T::MAX_FIXED_SHIFT`, else by the
 /// exact `−κ tanh(h_min/γ)` found in a first pass.
 #[inline(always)]
-fn both_passes<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool>(
+fn both_passes<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const M: bool>(
     pts: &[T],
     k: &Coeffs<T>,
 ) -> (T, usize, bool, Sums, T) {
     if k.kappa.to_f64() <= T::MAX_FIXED_SHIFT {
-        let (hmin, n, finite, sums) = pass::<T, S, D, L, F, true, true>(pts, k, k.kappa2);
+        let (hmin, n, finite, sums) = pass::<T, S, D, L, F, true, true, M>(pts, k, k.kappa2);
         return (hmin, n, finite, sums, k.kappa);
     }
-    let (hmin, n, finite, _) = pass::<T, S, D, L, F, false, false>(pts, k, T::ZERO);
+    let (hmin, n, finite, _) = pass::<T, S, D, L, F, false, false, M>(pts, k, T::ZERO);
     if !finite || n == 0 {
         return (hmin, n, finite, Sums::default(), T::ZERO);
     }
     let (th_min, _) = tanh_sech2::<T, F>(hmin, k.c2);
-    let (_, _, _, sums) = pass::<T, S, D, L, F, true, false>(pts, k, -(k.kappa2 * th_min));
+    let (_, _, _, sums) = pass::<T, S, D, L, F, true, false, M>(pts, k, -(k.kappa2 * th_min));
     (hmin, n, finite, sums, -(k.kappa * th_min))
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn both_passes_avx2<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool, Sums, T) {
-    both_passes::<T, S, D, L, true>(pts, k)
+fn both_passes_avx2<T: Lane, const S: usize, const D: usize, const L: usize, const M: bool>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool, Sums, T) {
+    both_passes::<T, S, D, L, true, M>(pts, k)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx2,fma")]
-fn both_passes_avx512<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool, Sums, T) {
-    both_passes::<T, S, D, L, true>(pts, k)
+fn both_passes_avx512<T: Lane, const S: usize, const D: usize, const L: usize, const M: bool>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool, Sums, T) {
+    both_passes::<T, S, D, L, true, M>(pts, k)
 }
 
-fn dispatch<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], k: &Coeffs<T>, level: SimdLevel) -> (T, usize, bool, Sums, T) {
+fn dispatch<T: Lane, const S: usize, const D: usize, const L: usize, const M: bool>(pts: &[T], k: &Coeffs<T>, level: SimdLevel) -> (T, usize, bool, Sums, T) {
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY: each arm runs only when the CPU reports the features its build enables.
         match level {
             SimdLevel::Avx512 if SimdLevel::Avx512.is_supported() => {
-                return unsafe { both_passes_avx512::<T, S, D, L>(pts, k) };
+                return unsafe { both_passes_avx512::<T, S, D, L, M>(pts, k) };
             }
             SimdLevel::Avx2 | SimdLevel::Avx512 if SimdLevel::Avx2.is_supported() => {
-                return unsafe { both_passes_avx2::<T, S, D, L>(pts, k) };
+                return unsafe { both_passes_avx2::<T, S, D, L, M>(pts, k) };
             }
             _ => {}
         }
     }
     let _ = level;
-    both_passes::<T, S, D, L, false>(pts, k)
+    both_passes::<T, S, D, L, false, M>(pts, k)
 }
 
 /// Evaluates the composite barrier over a body-frame scan stored row-major with `stride`
@@ -328,6 +375,12 @@ fn dispatch<T: Lane, const S: usize, const D: usize, const L: usize>(pts: &[T], 
 /// assert!(b.grad_body[1] < 0.0); // moving left lowers H
 /// ```
 pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams, level: SimdLevel) -> Result<CompositeBarrier> {
+    evaluate_composite_moved(pts, stride, None, p, level)
+}
+
+/// [`evaluate_composite`] on points that are first moved by `motion` (see [`Motion`]), in
+/// the same pass: crop, height band and barrier see the moved points.
+pub fn evaluate_composite_moved<T: Lane>(pts: &[T], stride: usize, motion: Option<Motion>, p: &CompositeParams, level: SimdLevel) -> Result<CompositeBarrier> {
     let dim = p.envelope.dim();
     if stride != 2 && stride != 3 {
         return Err(Error::invalid("points", format!("points need 2 or 3 coordinates, got {stride}")));
@@ -341,6 +394,10 @@ pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams
     let a = p.envelope.inv_sq();
     let (z_lo, z_hi) = p.height_band.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
     let crop = p.crop_radius.unwrap_or(f64::INFINITY);
+    if motion.is_some_and(|m| !m.is_finite()) {
+        return Err(Error::invalid("motion", "contains NaN or inf"));
+    }
+    let m = motion.unwrap_or(Motion { cos: 1.0, sin: 0.0, tx: 0.0, ty: 0.0 });
     let k = Coeffs {
         ia: T::from_f64(a[0]),
         ib: T::from_f64(a[1]),
@@ -351,11 +408,18 @@ pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams
         c2: T::from_f64(2.0 * std::f64::consts::LOG2_E / p.gamma),
         kappa: T::from_f64(p.kappa),
         kappa2: T::from_f64(p.kappa * std::f64::consts::LOG2_E),
+        mc: T::from_f64(m.cos),
+        ms: T::from_f64(m.sin),
+        tx: T::from_f64(m.tx),
+        ty: T::from_f64(m.ty),
     };
-    let (hmin, n, finite, sums, shift) = match (stride, dim) {
-        (2, _) => dispatch::<T, 2, 2, 16>(pts, &k, level),
-        (3, 2) => dispatch::<T, 3, 2, 16>(pts, &k, level),
-        _ => dispatch::<T, 3, 3, 16>(pts, &k, level),
+    let (hmin, n, finite, sums, shift) = match (stride, dim, motion.is_some()) {
+        (2, _, false) => dispatch::<T, 2, 2, 16, false>(pts, &k, level),
+        (3, 2, false) => dispatch::<T, 3, 2, 16, false>(pts, &k, level),
+        (_, _, false) => dispatch::<T, 3, 3, 16, false>(pts, &k, level),
+        (2, _, true) => dispatch::<T, 2, 2, 16, true>(pts, &k, level),
+        (3, 2, true) => dispatch::<T, 3, 2, 16, true>(pts, &k, level),
+        (_, _, true) => dispatch::<T, 3, 3, 16, true>(pts, &k, level),
     };
     if !finite {
         return Err(Error::invalid("points", "contains NaN or inf (or a coordinate too large to square)"));

@@ -28,7 +28,7 @@ mod scan;
 
 use std::time::Instant;
 
-pub use composite::{evaluate_composite, CompositeBarrier, CompositeParams, SimdLevel};
+pub use composite::{evaluate_composite, evaluate_composite_moved, CompositeBarrier, CompositeParams, Motion, SimdLevel};
 pub use conic::{solve_rows, LinearConstraints};
 pub use ellipsoid::Envelope;
 pub use lane::Lane;
@@ -181,11 +181,13 @@ pub enum Points<'a> {
     F64(&'a [f64]),
 }
 
-/// A scan: points and their row stride.
+/// A scan: points, their row stride, and an optional [`Motion`] that moves them into the
+/// current body frame before use (for points measured in an earlier frame).
 #[derive(Debug, Clone, Copy)]
 pub struct Scan<'a> {
     points: Points<'a>,
     stride: usize,
+    motion: Option<Motion>,
 }
 
 impl<'a> Scan<'a> {
@@ -200,7 +202,18 @@ impl<'a> Scan<'a> {
         if len % stride != 0 {
             return Err(Error::invalid("points", format!("{len} values do not make rows of {stride}")));
         }
-        Ok(Self { points, stride })
+        Ok(Self { points, stride, motion: None })
+    }
+
+    /// The same points, moved by `motion` before use (crop, band and barrier see the moved
+    /// points; the composite applies it inside its kernel, the other methods to a copy).
+    pub fn moved(self, motion: Motion) -> Self {
+        Self { motion: Some(motion), ..self }
+    }
+
+    /// The motion applied before use, if any.
+    pub fn motion(&self) -> Option<Motion> {
+        self.motion
     }
 
     /// A scan of `f32` points with `stride` (2 or 3) coordinates each.
@@ -267,6 +280,8 @@ pub struct Shield {
     scratch: ScanScratch,
     buf32: Vec<f32>,
     buf64: Vec<f64>,
+    moved32: Vec<f32>,
+    moved64: Vec<f64>,
     body: Vec<f64>,
     rows: LinearConstraints,
 }
@@ -299,6 +314,8 @@ impl Shield {
             scratch: ScanScratch::default(),
             buf32: Vec::new(),
             buf64: Vec::new(),
+            moved32: Vec::new(),
+            moved64: Vec::new(),
             body: Vec::new(),
             rows: LinearConstraints::new(dim),
         })
@@ -342,6 +359,29 @@ impl Shield {
     /// by Clarabel.
     pub fn filter_with(&mut self, scan: &Scan, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<ShieldOutcome> {
         let start = Instant::now();
+        let in_kernel = matches!(self.config.method, ShieldMethod::Composite | ShieldMethod::Unfiltered);
+        if let Some(m) = scan.motion.filter(|_| !in_kernel) {
+            // the baselines read the points directly: move a copy first
+            if !m.is_finite() {
+                return Err(Error::invalid("motion", "contains NaN or inf"));
+            }
+            return match scan.points {
+                Points::F32(p) => {
+                    let mut buf = std::mem::take(&mut self.moved32);
+                    move_points(p, scan.stride, &m, &mut buf);
+                    let out = self.filter_with(&Scan::new_f32(&buf, scan.stride)?, state, u_nom, extra);
+                    self.moved32 = buf;
+                    out
+                }
+                Points::F64(p) => {
+                    let mut buf = std::mem::take(&mut self.moved64);
+                    move_points(p, scan.stride, &m, &mut buf);
+                    let out = self.filter_with(&Scan::new_f64(&buf, scan.stride)?, state, u_nom, extra);
+                    self.moved64 = buf;
+                    out
+                }
+            };
+        }
         let dim = self.dim();
         self.check_inputs(scan, state, u_nom, extra)?;
         let r = state.rotation;
@@ -441,6 +481,9 @@ impl Shield {
         extra: Option<&LinearConstraints>,
     ) -> Result<ShieldOutcome> {
         finite("position", position)?;
+        if scan.motion.is_some() {
+            return Err(Error::invalid("motion", "applies to body-frame scans; move world-frame points yourself"));
+        }
         let stride = scan.stride;
         let mut body = std::mem::take(&mut self.body);
         body.clear();
@@ -472,20 +515,37 @@ impl Shield {
         };
         if !self.config.scan.downsamples() {
             return match scan.points {
-                Points::F32(p) => evaluate_composite(p, scan.stride, &params, self.level),
-                Points::F64(p) => evaluate_composite(p, scan.stride, &params, self.level),
+                Points::F32(p) => evaluate_composite_moved(p, scan.stride, scan.motion, &params, self.level),
+                Points::F64(p) => evaluate_composite_moved(p, scan.stride, scan.motion, &params, self.level),
             };
         }
         check_finite(scan)?;
+        if scan.motion.is_some_and(|m| !m.is_finite()) {
+            return Err(Error::invalid("motion", "contains NaN or inf"));
+        }
         params.crop_radius = None;
         params.height_band = None;
         let dim = self.dim();
         match scan.points {
             Points::F32(p) => {
+                let p = match scan.motion {
+                    Some(m) => {
+                        move_points(p, scan.stride, &m, &mut self.moved32);
+                        &self.moved32[..]
+                    }
+                    None => p,
+                };
                 select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf32);
                 evaluate_composite(&self.buf32, dim, &params, self.level)
             }
             Points::F64(p) => {
+                let p = match scan.motion {
+                    Some(m) => {
+                        move_points(p, scan.stride, &m, &mut self.moved64);
+                        &self.moved64[..]
+                    }
+                    None => p,
+                };
                 select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf64);
                 evaluate_composite(&self.buf64, dim, &params, self.level)
             }
@@ -546,6 +606,15 @@ impl Shield {
             check_finite(scan)?;
         }
         Ok(())
+    }
+}
+
+/// `out` = the rows of `pts` (stride 2 or 3) moved by `m` ([`Motion::apply`]).
+pub fn move_points<T: Lane>(pts: &[T], stride: usize, m: &Motion, out: &mut Vec<T>) {
+    out.clear();
+    out.extend_from_slice(pts);
+    for row in out.chunks_exact_mut(stride) {
+        (row[0], row[1]) = m.apply(row[0], row[1]);
     }
 }
 
