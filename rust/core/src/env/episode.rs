@@ -429,8 +429,14 @@ impl Episode {
     fn select_near(&mut self) {
         let scan = self.world.scan();
         let limit = self.config.shield.scan.crop_radius.map_or(Real::INFINITY, |c| c + self.near_margin);
-        self.near.clear();
-        self.near.extend(scan.points.iter().zip(&scan.ranges).filter(|(p, r)| !p[0].is_nan() && **r <= limit).flat_map(|(p, _)| p.map(|v| v as f32)));
+        // every return is written, only the valid kept ones advance (no branches)
+        self.near.resize(3 * scan.points.len() + 3, 0.0);
+        let mut k = 0;
+        for (p, &r) in scan.points.iter().zip(&scan.ranges) {
+            self.near[k..k + 3].copy_from_slice(&p.map(|v| v as f32));
+            k += 3 * (!p[0].is_nan() & (r <= limit)) as usize;
+        }
+        self.near.truncate(k);
     }
 
     /// The motion that takes the kept returns (scan frame) into the current body frame; the

@@ -182,8 +182,10 @@ pub struct Lidar {
     order: Vec<u64>,
     /// Scratch of [`Lidar::scan_indexed_into`].
     pub(super) indexed: super::lidar_indexed::IndexedScratch,
-    /// Scratch of the noise and dropout draws.
-    draws: Vec<Real>,
+    /// Scratch of the noise draws (one normal per beam).
+    normals: Vec<Real>,
+    /// Scratch of the dropout draws (one uniform per beam).
+    uniforms: Vec<Real>,
 }
 
 impl Lidar {
@@ -205,7 +207,8 @@ impl Lidar {
             visible: Vec::new(),
             order: Vec::new(),
             indexed: Default::default(),
-            draws: Vec::new(),
+            normals: Vec::new(),
+            uniforms: Vec::new(),
         })
     }
 
@@ -462,44 +465,67 @@ impl Lidar {
     /// count per scan, drawn as blocks (see [`super::noise`]).
     pub(super) fn finish<R: Rng + ?Sized>(&mut self, rng: &mut R, out: &mut Scan) {
         let c = self.config;
-        let (lo, hi) = (c.min_range, c.max_range);
-        let in_range = |r: Real| r >= lo && r <= hi;
         let n = out.ranges.len();
         if c.range_noise_std > 0.0 {
-            self.draws.resize(n, 0.0);
-            fill_standard_normal(rng, &mut self.draws);
-            let sd = c.range_noise_std;
-            // a return out of range stays out; a noisy one that leaves the range is dropped
-            out.ranges.iter_mut().zip(&self.draws).for_each(|(r, z)| {
-                let noisy = *r + sd * z;
-                *r = if in_range(*r) & in_range(noisy) { noisy } else { Real::INFINITY };
-            });
-        } else {
-            out.ranges.iter_mut().for_each(|r| *r = if in_range(*r) { *r } else { Real::INFINITY });
+            self.normals.resize(n, 0.0);
+            fill_standard_normal(rng, &mut self.normals);
         }
         if c.dropout > 0.0 {
-            self.draws.resize(n, 0.0);
-            fill_unit_uniform(rng, &mut self.draws);
-            out.ranges.iter_mut().zip(&self.draws).for_each(|(r, u)| *r = if *u < c.dropout { Real::INFINITY } else { *r });
+            self.uniforms.resize(n, 0.0);
+            fill_unit_uniform(rng, &mut self.uniforms);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU has AVX2 and FMA, checked just above.
+            unsafe { self.apply_draws_and_points_avx2(out) };
+            return;
+        }
+        self.apply_draws_and_points(out);
+    }
+
+    /// [`Lidar::apply_draws_and_points`] built for AVX2 and FMA (same numbers: no fused
+    /// multiply-add is asked for).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn apply_draws_and_points_avx2(&self, out: &mut Scan) {
+        self.apply_draws_and_points(out);
+    }
+
+    /// The range limits, the drawn noise and dropout, and the points, without branches.
+    #[inline(always)]
+    fn apply_draws_and_points(&self, out: &mut Scan) {
+        let c = self.config;
+        let (lo, hi) = (c.min_range, c.max_range);
+        let in_range = |r: Real| r >= lo && r <= hi;
+        if c.range_noise_std > 0.0 {
+            let sd = c.range_noise_std;
+            // a return out of range stays out; a noisy one that leaves the range is dropped
+            for (r, z) in out.ranges.iter_mut().zip(&self.normals) {
+                let noisy = *r + sd * z;
+                *r = if in_range(*r) & in_range(noisy) { noisy } else { Real::INFINITY };
+            }
+        } else {
+            for r in out.ranges.iter_mut() {
+                *r = if in_range(*r) { *r } else { Real::INFINITY };
+            }
+        }
+        if c.dropout > 0.0 {
+            for (r, u) in out.ranges.iter_mut().zip(&self.uniforms) {
+                *r = if *u < c.dropout { Real::INFINITY } else { *r };
+            }
         }
         let (ms, mc) = c.mount.yaw.sin_cos();
         let n = c.columns;
-        // the points, without branches (several beams at once)
-        out.points.clear();
-        out.points.reserve(out.ranges.len());
+        out.points.resize(out.ranges.len(), [0.0; 3]);
         for k in 0..c.channels {
             let (ec, es) = (self.el_cos[k], self.el_sin[k]);
-            let row = out.ranges[k * n..(k + 1) * n].iter().zip(self.az_cos.iter().zip(&self.az_sin));
-            out.points.extend(row.map(|(&r, (&ac, &as_))| {
+            let rows = out.points[k * n..(k + 1) * n].iter_mut().zip(&out.ranges[k * n..(k + 1) * n]);
+            for ((p, &r), (&ac, &as_)) in rows.zip(self.az_cos.iter().zip(&self.az_sin)) {
                 let h = r * ec;
                 let (xs, ys) = (h * ac, h * as_);
                 let q = [c.mount.x + mc * xs - ms * ys, c.mount.y + ms * xs + mc * ys, c.mount.z + r * es];
-                if r.is_finite() {
-                    q
-                } else {
-                    [Real::NAN; 3]
-                }
-            }));
+                *p = if r.is_finite() { q } else { [Real::NAN; 3] };
+            }
         }
     }
 }
