@@ -103,6 +103,41 @@ fn driving_into_the_cabinet_is_a_contact_judged_on_the_footprint() {
     assert!(first_contact.is_some(), "never reached the cabinet");
 }
 
+/// A world asked for its clearance each step skips the contact solver far from walls: the
+/// trajectory is the solver's to rounding, every free step ends clear of walls and of the
+/// pushed chair and opening door of `dynamic_obstacles`, contacts are found as often, and
+/// near walls the solver runs.
+#[test]
+fn free_steps_far_from_walls_change_nothing_but_rounding() {
+    let cfg = WorldConfig { lidar: LidarConfig { range_noise_std: 0.0, ..Default::default() }, ..Default::default() };
+    for (preset, steps) in [("constricted_passage", 600), ("dynamic_obstacles", 1500)] {
+        let mut solver = World::from_preset(preset, cfg).unwrap();
+        let mut free = World::from_preset(preset, cfg).unwrap();
+        let (mut contacts_a, mut contacts_b, mut worst) = (0, 0, 0.0f64);
+        for k in 0..steps {
+            let t = k as f64 * 0.02;
+            let cmd = if preset == "constricted_passage" { [1.0, 0.2, 0.4 * (2.5 * t).sin()] } else { [0.3 * (0.7 * t).cos(), 0.6 * (0.45 * t).sin(), 1.4 * (0.9 * t).sin()] };
+            let a = solver.step(cmd).unwrap();
+            let before = free.free_steps();
+            let b = free.step(cmd).unwrap();
+            free.clearance();
+            worst = worst.max((a.true_pose.x - b.true_pose.x).abs()).max((a.true_pose.y - b.true_pose.y).abs()).max((a.true_pose.yaw - b.true_pose.yaw).abs());
+            if free.free_steps() > before {
+                // a free step ends clear of everything by most of the margin
+                let exact = free.walls_now().iter().map(|s| footprint_segment_distance(&free.config().robot, b.true_pose, s)).fold(f64::INFINITY, f64::min);
+                assert!(!b.contacts.any() && exact > 0.04, "{preset} step {k}: a free step ended {exact} m from a wall");
+            }
+            contacts_a += a.contacts.any() as i32;
+            contacts_b += b.contacts.any() as i32;
+        }
+        assert_eq!(solver.free_steps(), 0);
+        let n = free.free_steps();
+        assert!(n > 100 && n < steps as u64 - 50, "{preset}: {n} free steps of {steps}");
+        assert!(contacts_a > 20 && (contacts_a - contacts_b).abs() <= 2, "{preset}: contact steps {contacts_a} vs {contacts_b}");
+        assert!(worst < 1e-4, "{preset}: trajectories apart by {worst}");
+    }
+}
+
 /// `World::clearance` (an index search, then a kept set of walls while the robot moves
 /// within a budget) equals the brute-force minimum over every wall, step after step.
 #[test]

@@ -108,6 +108,15 @@ impl MovingObstacle {
         self.trajectory.validate()
     }
 
+    /// A bound on how far any point of the obstacle moves between its poses at `t0` and `t1`
+    /// (moving straight and turning between them, as the physics moves it): the frame's
+    /// displacement plus the farthest vertex's radius times the turn.
+    pub fn max_travel(&self, t0: Real, t1: Real) -> Real {
+        let (a, b) = (self.trajectory.pose_at(t0), self.trajectory.pose_at(t1));
+        let radius = self.shape.vertices.iter().map(|p| p[0].hypot(p[1])).fold(0.0, Real::max);
+        (b.x - a.x).hypot(b.y - a.y) + radius * super::wrap_angle(b.yaw - a.yaw).abs()
+    }
+
     /// The obstacle's walls in the world frame at time `t`, appended to `out`.
     pub fn segments_at(&self, t: Real, out: &mut Vec<Segment>) {
         let pose = self.trajectory.pose_at(t);

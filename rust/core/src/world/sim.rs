@@ -31,6 +31,11 @@ pub const CLEARANCE_SEARCH: Real = 2.0;
 /// How far (m) footprint points may move before [`World::clearance`] searches the index again.
 pub const CLEARANCE_BUDGET: Real = 0.25;
 
+/// Margin (m) by which the clearance must exceed how far robot and obstacles can close in
+/// during a step for the step to skip the contact solver (far above rapier's 2 mm contact
+/// prediction and the 1 mm contact tolerance).
+pub const FREE_STEP_MARGIN: Real = 0.05;
+
 /// Everything about a world that is not the scenario.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WorldConfig {
@@ -93,6 +98,10 @@ pub struct World {
     /// of `clearance_anchor` (see [`World::clearance`]).
     clearance_kept: Vec<Segment>,
     clearance_anchor: Option<Pose2>,
+    /// `(time, pose, clearance)` of the latest [`World::clearance`].
+    measured: Option<(Real, Pose2, Real)>,
+    /// Steps that skipped the contact solver (see [`World::free_steps`]).
+    free_steps: u64,
     moving_now: Vec<Segment>,
     moving: Vec<Segment>,
     contacts: ContactReport,
@@ -127,6 +136,8 @@ impl World {
             near_c2: Vec::new(),
             clearance_kept: Vec::new(),
             clearance_anchor: None,
+            measured: None,
+            free_steps: 0,
             moving_now: Vec::new(),
             moving: Vec::new(),
             contacts: ContactReport::default(),
@@ -173,7 +184,12 @@ impl World {
         let dt = self.config.dt;
         let tr = self.tracker.step(command, dt)?;
         let t_next = self.time + dt;
-        self.contacts = self.physics.step(tr.velocity, dt, &self.scenario.obstacles, t_next)?;
+        self.contacts = if self.free_step(tr.velocity, dt, t_next) {
+            self.free_steps += 1;
+            self.physics.step_free(tr.velocity, dt, &self.scenario.obstacles, t_next)?
+        } else {
+            self.physics.step(tr.velocity, dt, &self.scenario.obstacles, t_next)?
+        };
         self.time = t_next;
         let true_pose = self.physics.robot_pose();
         let estimated_pose = self.odometry.update(self.time, true_pose, &mut self.rng);
@@ -210,7 +226,40 @@ impl World {
     /// which bounds how far any footprint point moves) are kept: at most `d + 2B` away when
     /// the search found `d`. Until the budget is spent only those are measured; any other
     /// wall is then farther than `d + B`, and the kept nearest one nearer.
+    ///
+    /// The clearance also lets the next step skip the contact solver when nothing can touch
+    /// the robot during it (see [`World::free_steps`]).
     pub fn clearance(&mut self) -> Real {
+        let c = self.measure_clearance();
+        self.measured = Some((self.time, self.physics.robot_pose(), c));
+        c
+    }
+
+    /// How many steps skipped rapier's contact solver: a step right after [`World::clearance`]
+    /// whose clearance exceeds how far robot and obstacles can close in (plus
+    /// [`FREE_STEP_MARGIN`]) flies the robot free and moves the obstacles, as the solver
+    /// would with no contact to resolve (to `f32` rounding, about 2e-7 m).
+    pub fn free_steps(&self) -> u64 {
+        self.free_steps
+    }
+
+    /// Whether the coming step of `dt` (body velocity `velocity`) can skip the contact
+    /// solver: the clearance was measured at this time and pose, and exceeds how far the
+    /// robot (translation plus half diagonal × turn) and the nearest-closing obstacle can move
+    /// toward each other, plus [`FREE_STEP_MARGIN`]. Nothing can then touch the robot during
+    /// the step, and free flight is what the solver would do.
+    fn free_step(&self, velocity: [Real; 3], dt: Real, t_next: Real) -> bool {
+        let Some((t, pose, clearance)) = self.measured else { return false };
+        if t != self.time || pose != self.physics.robot_pose() {
+            return false;
+        }
+        let shape = self.config.robot;
+        let robot = (velocity[0].hypot(velocity[1]) + 0.5 * shape.length.hypot(shape.width) * velocity[2].abs()) * dt;
+        let obstacles = self.scenario.obstacles.iter().map(|o| o.max_travel(self.time, t_next)).fold(0.0, Real::max);
+        clearance > robot + obstacles + FREE_STEP_MARGIN
+    }
+
+    fn measure_clearance(&mut self) -> Real {
         let pose = self.physics.robot_pose();
         let shape = self.config.robot;
         let half_diagonal = 0.5 * shape.length.hypot(shape.width);
