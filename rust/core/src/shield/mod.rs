@@ -360,27 +360,9 @@ impl Shield {
     pub fn filter_with(&mut self, scan: &Scan, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<ShieldOutcome> {
         let start = Instant::now();
         let in_kernel = matches!(self.config.method, ShieldMethod::Composite | ShieldMethod::Unfiltered);
-        if let Some(m) = scan.motion.filter(|_| !in_kernel) {
-            // the baselines read the points directly: move a copy first
-            if !m.is_finite() {
-                return Err(Error::invalid("motion", "contains NaN or inf"));
-            }
-            return match scan.points {
-                Points::F32(p) => {
-                    let mut buf = std::mem::take(&mut self.moved32);
-                    move_points(p, scan.stride, &m, &mut buf);
-                    let out = self.filter_with(&Scan::new_f32(&buf, scan.stride)?, state, u_nom, extra);
-                    self.moved32 = buf;
-                    out
-                }
-                Points::F64(p) => {
-                    let mut buf = std::mem::take(&mut self.moved64);
-                    move_points(p, scan.stride, &m, &mut buf);
-                    let out = self.filter_with(&Scan::new_f64(&buf, scan.stride)?, state, u_nom, extra);
-                    self.moved64 = buf;
-                    out
-                }
-            };
+        if scan.motion.is_some() && !in_kernel {
+            // the baselines read the points directly
+            return self.on_moved_copy(scan, |sh, moved| sh.filter_with(moved, state, u_nom, extra));
         }
         let dim = self.dim();
         self.check_inputs(scan, state, u_nom, extra)?;
@@ -519,37 +501,47 @@ impl Shield {
                 Points::F64(p) => evaluate_composite_moved(p, scan.stride, scan.motion, &params, self.level),
             };
         }
-        check_finite(scan)?;
-        if scan.motion.is_some_and(|m| !m.is_finite()) {
-            return Err(Error::invalid("motion", "contains NaN or inf"));
+        if scan.motion.is_some() {
+            // down-sampling reads the points directly
+            return self.on_moved_copy(scan, |sh, moved| sh.barrier(moved, state));
         }
+        check_finite(scan)?;
         params.crop_radius = None;
         params.height_band = None;
         let dim = self.dim();
         match scan.points {
             Points::F32(p) => {
-                let p = match scan.motion {
-                    Some(m) => {
-                        move_points(p, scan.stride, &m, &mut self.moved32);
-                        &self.moved32[..]
-                    }
-                    None => p,
-                };
                 select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf32);
                 evaluate_composite(&self.buf32, dim, &params, self.level)
             }
             Points::F64(p) => {
-                let p = match scan.motion {
-                    Some(m) => {
-                        move_points(p, scan.stride, &m, &mut self.moved64);
-                        &self.moved64[..]
-                    }
-                    None => p,
-                };
                 select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf64);
                 evaluate_composite(&self.buf64, dim, &params, self.level)
             }
         }
+    }
+
+    /// Runs `f` on a copy of `scan` moved by its motion (for the paths that read the points
+    /// directly; the composite kernel moves them itself).
+    fn on_moved_copy<R>(&mut self, scan: &Scan, f: impl FnOnce(&mut Self, &Scan) -> Result<R>) -> Result<R> {
+        let Some(m) = scan.motion else { return f(self, scan) };
+        if !m.is_finite() {
+            return Err(Error::invalid("motion", "contains NaN or inf"));
+        }
+        let (mut b32, mut b64) = (std::mem::take(&mut self.moved32), std::mem::take(&mut self.moved64));
+        let moved = match scan.points {
+            Points::F32(p) => {
+                move_points(p, scan.stride, &m, &mut b32);
+                Scan::new_f32(&b32, scan.stride)
+            }
+            Points::F64(p) => {
+                move_points(p, scan.stride, &m, &mut b64);
+                Scan::new_f64(&b64, scan.stride)
+            }
+        };
+        let out = moved.and_then(|moved| f(self, &moved));
+        (self.moved32, self.moved64) = (b32, b64);
+        out
     }
 
     /// The points a baseline uses, as `f64` rows of `dim` (checked finite by the caller).
