@@ -1,11 +1,12 @@
-//! A batch of episodes stepped together: one call steps every episode, on a pool of
-//! `threads` worker threads kept for the batch's life (episodes shared out by work stealing),
-//! with automatic resets.
+//! A batch of episodes stepped together: one call steps every episode on `threads` workers
+//! (the calling thread and helpers kept for the batch's life, episodes handed out one at a
+//! time), with automatic resets.
 //!
 //! Episode `i` of a batch behaves exactly like a lone [`Episode`] built and reset with the
 //! same seeds: the batch only schedules them.
 
 use super::episode::{Episode, EpisodeConfig, EpisodeSummary, Site, StepReport};
+use super::pool::Pool;
 use crate::error::{Error, Result};
 use crate::math::Real;
 
@@ -48,26 +49,10 @@ pub struct SlotOutcome {
 pub struct Batch {
     episodes: Vec<Episode>,
     mode: AutoReset,
-    /// The workers (none for one thread: the calling thread steps every episode).
-    pool: Option<rayon::ThreadPool>,
+    /// The workers (the calling thread and `threads − 1` helpers).
+    pool: Pool,
     needs_reset: Vec<bool>,
     obs_len: usize,
-}
-
-/// Runs `f` over `(item, index)`, on `pool`'s threads if there is one. A panic in `f` becomes
-/// an error (the other items still run).
-fn par_each<T: Send, F>(pool: Option<&rayon::ThreadPool>, items: &mut [T], f: F) -> Result<()>
-where
-    F: Fn(&mut T, usize) -> Result<()> + Sync,
-{
-    use rayon::prelude::*;
-    let guarded = |t: &mut T, i: usize| {
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(t, i))).unwrap_or_else(|_| Err(Error::Solver(format!("episode {i} of the batch panicked"))))
-    };
-    match pool {
-        Some(pool) if items.len() > 1 => pool.install(|| items.par_iter_mut().enumerate().map(|(i, t)| guarded(t, i)).collect::<Vec<_>>().into_iter().collect()),
-        _ => items.iter_mut().enumerate().try_for_each(|(i, t)| guarded(t, i)),
-    }
 }
 
 impl Batch {
@@ -79,14 +64,9 @@ impl Batch {
         if threads == 0 {
             return Err(Error::invalid("threads", "must be at least 1"));
         }
-        let pool = if threads > 1 {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).thread_name(|k| format!("shieldnav-batch-{k}")).build();
-            Some(pool.map_err(|e| Error::invalid("threads", format!("could not start {threads} worker threads: {e}")))?)
-        } else {
-            None
-        };
+        let pool = Pool::new(threads)?;
         let mut slots: Vec<Option<Episode>> = (0..seeds.len()).map(|_| None).collect();
-        par_each(pool.as_ref(), &mut slots, |slot, i| {
+        pool.run(&mut slots, |slot, i| {
             *slot = Some(Episode::new(site.clone(), config.clone(), seeds[i])?);
             Ok(())
         })?;
@@ -128,7 +108,7 @@ impl Batch {
         self.check_len("observations", obs.len(), self.obs_len)?;
         let l = self.obs_len;
         let mut work: Vec<(&mut Episode, &mut [f32])> = self.episodes.iter_mut().zip(obs.chunks_mut(l)).collect();
-        par_each(self.pool.as_ref(), &mut work, |(ep, o), i| {
+        self.pool.run(&mut work, |(ep, o), i| {
             ep.reset(seeds[i])?;
             ep.observe(o)
         })?;
@@ -156,7 +136,7 @@ impl Batch {
             .zip(out.iter_mut())
             .map(|(((ep, nr), (o, f)), s)| (ep, nr, o, f, s))
             .collect();
-        par_each(self.pool.as_ref(), &mut work, |(ep, needs_reset, o, f, slot), i| {
+        self.pool.run(&mut work, |(ep, needs_reset, o, f, slot), i| {
             if **needs_reset {
                 ep.reset(next_seeds[i])?;
                 **slot = SlotOutcome { report: StepReport::default(), reset: true, ended: None };

@@ -25,6 +25,7 @@ mod coverage;
 mod deadlock;
 mod episode;
 mod observation;
+mod pool;
 
 pub use batch::{AutoReset, Batch, SlotOutcome};
 pub use action::{check_action, nominal_command, ActionMode, ACTION_TOLERANCE};
