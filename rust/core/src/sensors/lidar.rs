@@ -183,7 +183,7 @@ pub struct Lidar {
     /// Scratch of [`Lidar::scan_indexed_into`].
     pub(super) indexed: super::lidar_indexed::IndexedScratch,
     /// Scratch of the noise draws (one normal per beam).
-    normals: Vec<Real>,
+    normals: Vec<f32>,
     /// Scratch of the dropout draws (one uniform per beam).
     uniforms: Vec<Real>,
 }
@@ -501,7 +501,7 @@ impl Lidar {
             let sd = c.range_noise_std;
             // a return out of range stays out; a noisy one that leaves the range is dropped
             for (r, z) in out.ranges.iter_mut().zip(&self.normals) {
-                let noisy = *r + sd * z;
+                let noisy = *r + sd * *z as Real;
                 *r = if in_range(*r) & in_range(noisy) { noisy } else { Real::INFINITY };
             }
         } else {
