@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use crate::error::{Error, Result};
 
 /// How long a helper spins for the next call before it sleeps.
-const SPIN: Duration = Duration::from_micros(200);
+const SPIN: Duration = Duration::from_micros(50);
 
 /// The job of one call: runs item `i`. The lifetime is erased; [`Pool::run`] does not return
 /// before every item it handed out has finished.
