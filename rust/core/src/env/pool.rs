@@ -9,7 +9,7 @@
 use std::cell::UnsafeCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
-use std::thread::{JoinHandle, Thread};
+use std::thread::Thread;
 use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
@@ -69,7 +69,8 @@ impl Shared {
 /// A pool of `threads − 1` helper threads; the caller of [`Pool::run`] is the last worker.
 pub(crate) struct Pool {
     shared: Arc<Shared>,
-    helpers: Vec<(Thread, JoinHandle<()>)>,
+    /// The helpers (detached: see `Drop`).
+    helpers: Vec<Thread>,
     /// Serialises calls (a `Batch` is `&mut` when it steps, but `Pool` stays `Sync`).
     call: Mutex<()>,
 }
@@ -129,7 +130,7 @@ impl Pool {
                 .name(format!("shieldnav-batch-{k}"))
                 .spawn(move || helper(s, k))
                 .map_err(|e| Error::invalid("threads", format!("could not start {threads} worker threads: {e}")))?;
-            helpers.push((handle.thread().clone(), handle));
+            helpers.push(handle.thread().clone());
         }
         Ok(Self { shared, helpers, call: Mutex::new(()) })
     }
@@ -174,7 +175,7 @@ impl Pool {
             // claimed one has finished.
             unsafe { *s.job.get() = Some(job) };
             s.ticket.store((gen << 32) | n as u64, Ordering::SeqCst);
-            for (k, (thread, _)) in self.helpers.iter().enumerate() {
+            for (k, thread) in self.helpers.iter().enumerate() {
                 if s.sleeping[k].load(Ordering::SeqCst) {
                     thread.unpark();
                 }
@@ -199,13 +200,12 @@ impl Pool {
 }
 
 impl Drop for Pool {
+    /// Tells the helpers to stop and lets them go without joining them (as rayon does): no
+    /// call is running, and a copy of the pool in a forked child has no threads to join.
     fn drop(&mut self) {
         self.shared.shutdown.store(true, Ordering::SeqCst);
-        for (thread, _) in &self.helpers {
+        for thread in &self.helpers {
             thread.unpark();
-        }
-        for (_, handle) in self.helpers.drain(..) {
-            let _ = handle.join();
         }
     }
 }
@@ -254,5 +254,25 @@ mod tests {
             assert!(e.to_string().contains("episode 12"), "{e}");
         }
         assert!(Pool::new(0).is_err());
+    }
+
+    #[test]
+    fn dropped_pools_stop_their_helpers() {
+        let shared = {
+            let pool = Pool::new(3).unwrap();
+            let mut items = vec![0u8; 10];
+            pool.run(&mut items, |x, _| {
+                *x = 1;
+                Ok(())
+            })
+            .unwrap();
+            Arc::clone(&pool.shared)
+        };
+        // the two helpers drop their handles to the shared state as they leave
+        let start = Instant::now();
+        while Arc::strong_count(&shared) > 1 {
+            assert!(start.elapsed() < Duration::from_secs(10), "helpers still running");
+            std::thread::sleep(Duration::from_millis(1));
+        }
     }
 }
