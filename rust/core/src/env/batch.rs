@@ -61,9 +61,6 @@ impl Batch {
         if seeds.is_empty() {
             return Err(Error::invalid("num_envs", "must be at least 1"));
         }
-        if threads == 0 {
-            return Err(Error::invalid("threads", "must be at least 1"));
-        }
         let pool = Pool::new(threads)?;
         let mut slots: Vec<Option<Episode>> = (0..seeds.len()).map(|_| None).collect();
         pool.run(&mut slots, |slot, i| {
