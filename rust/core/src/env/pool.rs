@@ -169,7 +169,8 @@ impl Pool {
             // SAFETY: only the lifetime is erased; this call waits below until every item it
             // handed out has finished, so no helper reads `job` after it returns.
             let job: Job = unsafe { std::mem::transmute::<&(dyn Fn(usize) + Sync), Job>(job) };
-            let gen = generation(s.ticket.load(Ordering::Acquire)) + 1;
+            // (wraps after 2³² calls: `work` must see the same 32-bit generation the ticket holds)
+            let gen = (generation(s.ticket.load(Ordering::Acquire)) + 1) & 0xFFFF_FFFF;
             s.done.store(0, Ordering::Relaxed);
             // SAFETY: no item is claimable (the last call's ticket is exhausted) and every
             // claimed one has finished.
@@ -254,6 +255,26 @@ mod tests {
             assert!(e.to_string().contains("episode 12"), "{e}");
         }
         assert!(Pool::new(0).is_err());
+    }
+
+    #[test]
+    fn the_generation_wraps_without_losing_a_call() {
+        let pool = Pool::new(2).unwrap();
+        pool.shared.ticket.store(0xFFFF_FFFE << 32, Ordering::SeqCst);
+        let caller = std::thread::current().id();
+        for call in 0..4 {
+            // slow items: the calling thread takes its share unless it lost track of the call
+            let mut items = vec![None; 20];
+            pool.run(&mut items, |x, _| {
+                std::thread::sleep(Duration::from_millis(1));
+                *x = Some(std::thread::current().id());
+                Ok(())
+            })
+            .unwrap();
+            assert!(items.iter().all(|x| x.is_some()));
+            assert!(items.contains(&Some(caller)), "call {call}: the caller ran none of its items");
+        }
+        assert_eq!(generation(pool.shared.ticket.load(Ordering::SeqCst)), 2);
     }
 
     #[test]
