@@ -1,10 +1,11 @@
 //! The LIDAR on big maps: walls fetched bucket by bucket from a [`SegmentIndex`], nearest
 //! buckets first, as pieces (a wall's part inside a bucket: its beams are those through the
 //! part, its hits those of the whole wall). A planar scan skips every bucket whose beams all
-//! already hit something nearer than the box of its pieces, and every piece whose beams all
-//! already hit something no farther than the piece's box (occlusion culling, beam by beam).
-//! Per bucket, the pieces that face the sensor are picked without branches and their beams
-//! computed side by side before any is swept. Same ranges as [`Lidar::scan_into`] over all
+//! already hit something nearer than the box of its pieces, then, within a bucket, every
+//! group of pieces (those of one of its sub-cells, nearest sub-cell first) that is hidden so,
+//! and every piece whose beams all already hit something no farther than the piece's box
+//! (occlusion culling, beam by beam). Per group, the beams of all its pieces are computed at
+//! once, in lanes, before any is swept. Same ranges as [`Lidar::scan_into`] over all
 //! walls (culling only skips walls that cannot be seen), bit for bit but where a beam meets
 //! two walls at a corner and the two scans round differently which is first.
 
@@ -13,6 +14,7 @@ use rand::Rng;
 use super::lidar::{seg_origin_distance, Lidar, Scan};
 use crate::error::Result;
 use crate::math::Real;
+use crate::world::index::PieceLanes;
 use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
@@ -21,13 +23,35 @@ pub(super) struct IndexedScratch {
     /// Bucket offsets `(di, dj)` sorted by a lower bound of their distance, for `key`.
     offsets: Vec<(i32, i32)>,
     key: (u64, u64, i32),
-    /// Per piece of a bucket: its place and squared box distance, if it may be seen.
-    candidates: Vec<(u32, Real)>,
-    /// The beams of each candidate (see [`Lidar::wall_beams`]) and whether it is collinear
-    /// with the sensor.
-    beams: Vec<(i64, usize, bool)>,
+    /// Per piece of a class of a group, computed at once (see [`Lidar::piece_beams`]).
+    beams: BeamLanes,
     /// What the last scan did.
     stats: IndexedScanStats,
+}
+
+/// What [`Lidar::piece_beams`] finds for each of a run of pieces: its beams (first column and
+/// count, see [`Lidar::wall_beams`]), squared distance to its box, whether it may be seen
+/// (faces the sensor, tall enough for a planar scan, in range), and whether it is collinear
+/// with the sensor.
+#[derive(Debug, Clone, Default)]
+struct BeamLanes {
+    j0: Vec<i64>,
+    count: Vec<usize>,
+    box2: Vec<Real>,
+    keep: Vec<bool>,
+    collinear: Vec<bool>,
+}
+
+impl BeamLanes {
+    fn reserve(&mut self, n: usize) {
+        if self.j0.len() < n {
+            self.j0.resize(n, 0);
+            self.count.resize(n, 0);
+            self.box2.resize(n, 0.0);
+            self.keep.resize(n, false);
+            self.collinear.resize(n, false);
+        }
+    }
 }
 
 /// Work done by the last [`Lidar::scan_indexed_into`].
@@ -41,10 +65,19 @@ pub struct IndexedScanStats {
     pub walls_visited: usize,
     /// Pieces swept (facing the sensor, in range, not occluded).
     pub walls_swept: usize,
+    /// Non-empty groups of pieces (a bucket's sub-cell, see [`crate::world::SegmentIndex`]) in
+    /// the buckets not skipped, skipped as out of range or occluded.
+    pub groups_occluded: usize,
     /// Pieces facing the sensor and in range but skipped as occluded (every beam of theirs
     /// already hits something nearer).
     pub walls_occluded: usize,
 }
+
+/// Pieces whose beams are computed at once (see [`PieceLanes`]'s padding).
+use crate::world::index::LANES;
+
+/// Pieces a group needs for the LIDAR to test whether its box is hidden before reading them.
+const GROUP_TEST_MIN: u32 = 16;
 
 /// Whether none of the `count` ranges from column `j0` (modulo their number, a power of two)
 /// exceeds `d`.
@@ -90,6 +123,71 @@ fn silhouette(x: Real, y: Real, x0: Real, y0: Real, x1: Real, y1: Real) -> ([Rea
 }
 
 impl Lidar {
+    /// Whether the walls in the box `[x0, y0, x1, y1]` (not empty) cannot be seen from the
+    /// sensor at `sp` (`sin_cos` its yaw's): the box is out of range or, for a planar scan seen
+    /// from outside the box, every beam through it already hits something no farther than it.
+    #[inline(always)]
+    fn box_hidden(&self, [x0, y0, x1, y1]: [Real; 4], sp: Pose2, (s, co): (Real, Real), ranges: &[Real]) -> bool {
+        let ddx = (x0 - sp.x).max(0.0).max(sp.x - x1);
+        let ddy = (y0 - sp.y).max(0.0).max(sp.y - y1);
+        let dmin = (ddx * ddx + ddy * ddy).sqrt();
+        if dmin > self.config.max_range {
+            return true;
+        }
+        if self.config.channels > 1 || dmin == 0.0 {
+            return false;
+        }
+        // seen from outside, the box spans the angle between its two silhouette corners (the
+        // others lie between them)
+        let to_sensor = |p: [Real; 2]| {
+            let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
+            [co * dx + s * dy, -s * dx + co * dy]
+        };
+        let (p, q) = silhouette(sp.x, sp.y, x0, y0, x1, y1);
+        let (a, b) = (to_sensor(p), to_sensor(q));
+        let cr = cross2(a, b);
+        let (j0, count) = self.wall_beams(a, b, cr);
+        cr != 0.0 && none_beyond(ranges, j0, count, dmin)
+    }
+
+    /// The [`BeamLanes`] of the `m` pieces of `l` from `k0` seen from the sensor at `sp`
+    /// (`sin_cos` its yaw's), written to `out` from its start: the same arithmetic as piece by
+    /// piece, in blocks of [`LANES`] (past the last piece, `l`'s padding is computed and ignored).
+    #[inline(always)]
+    fn piece_beams(&self, l: &PieceLanes, k0: usize, m: usize, sp: Pose2, (s, co): (Real, Real), out: &mut BeamLanes) {
+        let c = &self.config;
+        let (planar, zs, max2) = (c.channels == 1, c.mount.z, c.max_range * c.max_range);
+        let to_sensor = |x: Real, y: Real| {
+            let (dx, dy) = (x - sp.x, y - sp.y);
+            [co * dx + s * dy, -s * dx + co * dy]
+        };
+        for blk in 0..m.div_ceil(LANES) {
+            let (k, o) = (k0 + blk * LANES, blk * LANES);
+            let lane = |v: &[Real]| -> [Real; LANES] { v[k..k + LANES].try_into().unwrap() };
+            let (px, py, qx, qy, ax, ay, ex, ey, height) = (lane(&l.px), lane(&l.py), lane(&l.qx), lane(&l.qy), lane(&l.ax), lane(&l.ay), lane(&l.ex), lane(&l.ey), lane(&l.height));
+            let one_sided: [bool; LANES] = l.one_sided[k..k + LANES].try_into().unwrap();
+            let (mut j0s, mut counts, mut box2s, mut keep, mut collinear) = ([0i64; LANES], [0usize; LANES], [0.0; LANES], [false; LANES], [false; LANES]);
+            for i in 0..LANES {
+                let faces = !one_sided[i] | (cross2([ex[i], ey[i]], [sp.x - ax[i], sp.y - ay[i]]) < 0.0);
+                // squared distance to the piece's box: a lower bound of the piece's (exact for
+                // the axis-aligned walls of grid maps), without division or root
+                let bx = (px[i].min(qx[i]) - sp.x).max(0.0).max(sp.x - px[i].max(qx[i]));
+                let by = (py[i].min(qy[i]) - sp.y).max(0.0).max(sp.y - py[i].max(qy[i]));
+                box2s[i] = bx * bx + by * by;
+                let (p, q) = (to_sensor(px[i], py[i]), to_sensor(qx[i], qy[i]));
+                let cr = cross2(p, q);
+                (j0s[i], counts[i]) = self.wall_beams(p, q, cr);
+                keep[i] = faces & !(planar & (zs > height[i])) & (box2s[i] <= max2);
+                collinear[i] = cr == 0.0;
+            }
+            out.j0[o..o + LANES].copy_from_slice(&j0s);
+            out.count[o..o + LANES].copy_from_slice(&counts);
+            out.box2[o..o + LANES].copy_from_slice(&box2s);
+            out.keep[o..o + LANES].copy_from_slice(&keep);
+            out.collinear[o..o + LANES].copy_from_slice(&collinear);
+        }
+    }
+
     /// What the last [`Lidar::scan_indexed_into`] did (buckets visited and culled, walls swept).
     pub fn last_indexed_stats(&self) -> IndexedScanStats {
         self.indexed.stats
@@ -164,96 +262,90 @@ impl Lidar {
         let cj = ((sp.y - origin[1]) / cell).floor() as i64;
         let max2 = c.max_range * c.max_range;
         let mut stats = IndexedScanStats::default();
-        let mut cand = std::mem::take(&mut scratch.candidates);
         let mut beams = std::mem::take(&mut scratch.beams);
+        let lanes = index.lanes();
         for &(di, dj) in &scratch.offsets {
             let (i, j) = (ci + di as i64, cj + dj as i64);
             if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
                 continue;
             }
-            let (pieces, [x0, y0, x1, y1], class_ends) = index.bucket_pieces(i as usize, j as usize);
+            let (pieces, bucket_box, groups, start) = index.bucket_pieces(i as usize, j as usize);
             if pieces.is_empty() {
                 continue;
             }
+            let [x0, y0, x1, y1] = bucket_box;
             let ddx = (x0 - sp.x).max(0.0).max(sp.x - x1);
             let ddy = (y0 - sp.y).max(0.0).max(sp.y - y1);
-            let dmin_b = (ddx * ddx + ddy * ddy).sqrt();
-            if dmin_b > c.max_range {
+            if ddx * ddx + ddy * ddy > max2 {
                 continue;
             }
             stats.buckets += 1;
-            // occlusion culling, away from the sensor: skip the bucket if every beam through
-            // the box of its pieces already hits something no farther than the box
-            if planar && dmin_b > 0.0 {
-                // seen from outside, the box spans the angle between its two silhouette
-                // corners (the others lie between them)
-                let (p, q) = silhouette(sp.x, sp.y, x0, y0, x1, y1);
-                let (a, b) = (to_sensor(p), to_sensor(q));
-                let cr = cross2(a, b);
-                let (j0, count) = self.wall_beams(a, b, cr);
-                if cr != 0.0 && none_beyond(&out.ranges, j0, count, dmin_b) {
-                    stats.buckets_occluded += 1;
+            if self.box_hidden(bucket_box, sp, (s, co), &out.ranges) {
+                stats.buckets_occluded += 1;
+                continue;
+            }
+            beams.reserve(pieces.len() + LANES);
+            for &g in index.group_order(i as usize, j as usize, [sp.x, sp.y]) {
+                let grp = &groups[g as usize];
+                if grp.start == grp.ends[4] {
                     continue;
                 }
-            }
-            // the pieces that face the sensor, are tall enough and in range, without branches;
-            // a class of axis-aligned one-sided pieces that all face away is not read at all
-            // (a wall at x = w facing +x is seen only from x > w ≥ x0, and so on)
-            let away = [sp.x <= x0, sp.x >= x1, sp.y <= y0, sp.y >= y1, false];
-            cand.clear();
-            cand.resize(pieces.len(), (0, 0.0));
-            let (mut n, mut from) = (0, 0);
-            for (class, &away) in away.iter().enumerate() {
-                let to = class_ends.get(class).map_or(pieces.len(), |&e| e as usize);
-                if !away {
-                    stats.walls_visited += to - from;
-                    for (k, pc) in pieces.iter().enumerate().take(to).skip(from) {
-                        let faces = !pc.one_sided | (cross2([pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]], [sp.x - pc.a[0], sp.y - pc.a[1]]) < 0.0);
-                        // squared distance to the piece's box: a lower bound of the piece's
-                        // (exact for the axis-aligned walls of grid maps), without division or root
-                        let bx = (pc.p[0].min(pc.q[0]) - sp.x).max(0.0).max(sp.x - pc.p[0].max(pc.q[0]));
-                        let by = (pc.p[1].min(pc.q[1]) - sp.y).max(0.0).max(sp.y - pc.p[1].max(pc.q[1]));
-                        let box2 = bx * bx + by * by;
-                        cand[n] = (k as u32, box2);
-                        n += (faces & !(planar & (zs > pc.height)) & (box2 <= max2)) as usize;
+                // occlusion culling, away from the sensor: skip the group if every beam through
+                // the box of its pieces already hits something no farther than the box
+                // (a group of a few pieces is cheaper read than tested)
+                if grp.ends[4] - grp.start >= GROUP_TEST_MIN && self.box_hidden(grp.bx, sp, (s, co), &out.ranges) {
+                    stats.groups_occluded += 1;
+                    continue;
+                }
+                let [x0, y0, x1, y1] = grp.bx;
+                // the pieces that face the sensor, are tall enough and in range, without
+                // branches; a class of axis-aligned one-sided pieces that all face away is not
+                // read at all (a wall at x = w facing +x is seen only from x > w ≥ x0, and so on)
+                let away = [sp.x <= x0, sp.x >= x1, sp.y <= y0, sp.y >= y1, false];
+                // the beams of every piece of the group at once (independent, in lanes of four),
+                // then the sweeps of those in the classes not skipped
+                let (g0, g1) = (grp.start as usize, grp.ends[4] as usize);
+                self.piece_beams(lanes, start + g0, g1 - g0, sp, (s, co), &mut beams);
+                let mut from = g0;
+                for (&away, &to) in away.iter().zip(&grp.ends) {
+                    let to = to as usize;
+                    if away || to == from {
+                        from = to;
+                        continue;
                     }
-                }
-                from = to;
-            }
-            // their beams, side by side (independent, so the divisions and polynomials overlap)
-            beams.clear();
-            beams.extend(cand[..n].iter().map(|&(k, _)| {
-                let pc = &pieces[k as usize];
-                let (p, q) = (to_sensor(pc.p), to_sensor(pc.q));
-                let cr = cross2(p, q);
-                let (j0, count) = self.wall_beams(p, q, cr);
-                (j0, count, cr == 0.0)
-            }));
-            for (&(k, box2), &(j0, count, collinear)) in cand[..n].iter().zip(&beams) {
-                let pc = &pieces[k as usize];
-                if collinear {
-                    // collinear with the sensor (its beams above are not used)
-                    stats.walls_swept += 1;
-                    let (a, b, p, q) = (to_sensor(pc.a), to_sensor(pc.b), to_sensor(pc.p), to_sensor(pc.q));
-                    self.sweep_piece(a, b, p, q, pc.height, box2.sqrt(), zs, &mut out.ranges);
-                    continue;
-                }
-                // a planar beam that already hits no farther than the piece's box cannot change
-                if planar && none_beyond_sq(&out.ranges, j0, count, box2) {
-                    stats.walls_occluded += 1;
-                    continue;
-                }
-                stats.walls_swept += 1;
-                let (a, b) = (to_sensor(pc.a), to_sensor(pc.b));
-                if planar {
-                    self.sweep_flat(a, b, j0, count, &mut out.ranges);
-                } else {
-                    self.sweep(a, b, pc.height, j0, count, zs, box2.sqrt(), &mut out.ranges);
+                    stats.walls_visited += to - from;
+                    let r = from - g0..to - g0;
+                    let (j0s, counts, box2s, keep, collinear) = (&beams.j0[r.clone()], &beams.count[r.clone()], &beams.box2[r.clone()], &beams.keep[r.clone()], &beams.collinear[r]);
+                    for (i, pc) in pieces[from..to].iter().enumerate() {
+                        if !keep[i] {
+                            continue;
+                        }
+                        let (j0, count, box2) = (j0s[i], counts[i], box2s[i]);
+                        if collinear[i] {
+                            // collinear with the sensor (its beams above are not used)
+                            stats.walls_swept += 1;
+                            let (a, b, p, q) = (to_sensor(pc.a), to_sensor(pc.b), to_sensor(pc.p), to_sensor(pc.q));
+                            self.sweep_piece(a, b, p, q, pc.height, box2.sqrt(), zs, &mut out.ranges);
+                            continue;
+                        }
+                        // a planar beam that already hits no farther than the piece's box cannot change
+                        if planar && none_beyond_sq(&out.ranges, j0, count, box2) {
+                            stats.walls_occluded += 1;
+                            continue;
+                        }
+                        stats.walls_swept += 1;
+                        let (a, b) = (to_sensor(pc.a), to_sensor(pc.b));
+                        if planar {
+                            self.sweep_flat(a, b, j0, count, &mut out.ranges);
+                        } else {
+                            self.sweep(a, b, pc.height, j0, count, zs, box2.sqrt(), &mut out.ranges);
+                        }
+                    }
+                    from = to;
                 }
             }
         }
         scratch.beams = beams;
-        scratch.candidates = cand;
         scratch.stats = stats;
         self.indexed = scratch;
     }

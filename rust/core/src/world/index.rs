@@ -27,10 +27,14 @@ pub struct SegmentIndex {
     /// Bucket `b`'s pieces are `pieces[piece_starts[b]..piece_starts[b + 1]]`.
     piece_starts: Vec<u32>,
     pieces: Vec<Piece>,
+    /// The pieces again, as lanes.
+    lanes: PieceLanes,
     /// Per bucket: the box `[x0, y0, x1, y1]` of its pieces.
     content: Vec<[Real; 4]>,
-    /// Per bucket: where each [`Facing`] class of its pieces ends (they are sorted by class).
-    class_ends: Vec<[u32; 4]>,
+    /// Per bucket: its [`Group`]s, `GROUPS` of them, in sub-cell order `sx + SUB * sy`.
+    groups: Vec<Group>,
+    /// Per sub-cell `(sx, sy)` of a bucket nearest the sensor: the groups nearest first.
+    orders: [[u8; GROUPS]; GROUPS],
     stamp: Vec<u32>,
     epoch: u32,
 }
@@ -95,7 +99,7 @@ impl SegmentIndex {
         let mut piece_starts = Vec::with_capacity(nx * ny + 1);
         let mut pieces = Vec::with_capacity(ids.len());
         let mut content = Vec::with_capacity(nx * ny);
-        let mut class_ends = Vec::with_capacity(nx * ny);
+        let mut groups = Vec::with_capacity(nx * ny * GROUPS);
         // a wall on a bucket's edge may lie a rounding error outside the computed edge
         let eps = 1e-9 * (1.0 + lo[0].abs().max(lo[1].abs()) + nx.max(ny) as Real * cell);
         for b in 0..nx * ny {
@@ -111,18 +115,43 @@ impl SegmentIndex {
                 }
             }
             content.push(bx);
+            // grouped by the sub-cell of their middle, then sorted by class
             let start = *piece_starts.last().unwrap() as usize;
             let mine = &mut pieces[start..];
-            mine.sort_by_key(|pc| Facing::of(pc) as u8);
-            let mut ends = [0u32; 4];
-            for (c, end) in ends.iter_mut().enumerate() {
-                *end = mine.partition_point(|pc| (Facing::of(pc) as usize) <= c) as u32;
+            let sub = |pc: &Piece| {
+                let f = |v: Real, o: Real| (((v - o) / cell * SUB as Real).floor().max(0.0) as usize).min(SUB - 1);
+                f((pc.p[0] + pc.q[0]) / 2.0, x0) + SUB * f((pc.p[1] + pc.q[1]) / 2.0, y0)
+            };
+            mine.sort_by_key(|pc| (sub(pc), Facing::of(pc) as u8));
+            let mut from = 0;
+            for g in 0..GROUPS {
+                let to = from + mine[from..].partition_point(|pc| sub(pc) <= g);
+                let of = &mine[from..to];
+                let mut ends = [0u32; 5];
+                for (c, end) in ends.iter_mut().enumerate() {
+                    *end = (from + of.partition_point(|pc| (Facing::of(pc) as usize) <= c)) as u32;
+                }
+                let bx = of.iter().fold([Real::INFINITY, Real::INFINITY, Real::NEG_INFINITY, Real::NEG_INFINITY], |b, pc| {
+                    [b[0].min(pc.p[0]).min(pc.q[0]), b[1].min(pc.p[1]).min(pc.q[1]), b[2].max(pc.p[0]).max(pc.q[0]), b[3].max(pc.p[1]).max(pc.q[1])]
+                });
+                groups.push(Group { bx, start: from as u32, ends });
+                from = to;
             }
-            class_ends.push(ends);
         }
         piece_starts.push(pieces.len() as u32);
+        let lanes = PieceLanes::of(&pieces);
+        // each sub-cell's groups by the distance between sub-cell centres, nearest first
+        let mut orders = [[0u8; GROUPS]; GROUPS];
+        for (s, order) in orders.iter_mut().enumerate() {
+            let d = |g: usize| ((g % SUB) as i64 - (s % SUB) as i64).pow(2) + ((g / SUB) as i64 - (s / SUB) as i64).pow(2);
+            let mut gs: Vec<usize> = (0..GROUPS).collect();
+            gs.sort_by_key(|&g| (d(g), g));
+            for (o, g) in order.iter_mut().zip(gs) {
+                *o = g as u8;
+            }
+        }
         let n = segments.len();
-        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, piece_starts, pieces, content, class_ends, stamp: vec![0; n], epoch: 0 })
+        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, piece_starts, pieces, lanes, content, groups, orders, stamp: vec![0; n], epoch: 0 })
     }
 
     /// All walls.
@@ -153,12 +182,27 @@ impl SegmentIndex {
     }
 
     /// The pieces of the walls in bucket `(i, j)`, the box `[x0, y0, x1, y1]` holding them
-    /// (empty, `x0 > x1`, if there are none), and where each [`Facing`] class among them ends
-    /// (sorted by class; the last, [`Facing::Any`], ends with the slice).
+    /// (empty, `x0 > x1`, if there are none), their [`Group`]s (in sub-cell order), and where
+    /// they start in [`SegmentIndex::lanes`].
     #[inline]
-    pub(crate) fn bucket_pieces(&self, i: usize, j: usize) -> (&[Piece], [Real; 4], [u32; 4]) {
+    pub(crate) fn bucket_pieces(&self, i: usize, j: usize) -> (&[Piece], [Real; 4], &[Group], usize) {
         let b = j * self.nx + i;
-        (&self.pieces[self.piece_starts[b] as usize..self.piece_starts[b + 1] as usize], self.content[b], self.class_ends[b])
+        let start = self.piece_starts[b] as usize;
+        (&self.pieces[start..self.piece_starts[b + 1] as usize], self.content[b], &self.groups[b * GROUPS..(b + 1) * GROUPS], start)
+    }
+
+    /// Every bucket's pieces, bucket after bucket, as lanes.
+    #[inline]
+    pub(crate) fn lanes(&self) -> &PieceLanes {
+        &self.lanes
+    }
+
+    /// The groups of bucket `(i, j)` in order of distance from `point` (by sub-cell centres:
+    /// the sub-cell nearest `point`'s first).
+    #[inline]
+    pub(crate) fn group_order(&self, i: usize, j: usize, point: Point2) -> &[u8; GROUPS] {
+        let f = |v: Real, o: Real, k: usize| (((v - o) / self.cell - k as Real) * SUB as Real).floor().clamp(0.0, (SUB - 1) as Real) as usize;
+        &self.orders[f(point[0], self.origin[0], i) + SUB * f(point[1], self.origin[1], j)]
     }
 
     /// Replaces `out` with every wall in a bucket touched by the square around the disc of
@@ -191,6 +235,22 @@ impl SegmentIndex {
     }
 }
 
+/// Sub-cells per bucket side: a bucket's pieces are grouped by the sub-cell of their middle,
+/// so that the LIDAR can skip the groups hidden behind nearer walls.
+pub(crate) const SUB: usize = 2;
+/// Groups per bucket.
+pub(crate) const GROUPS: usize = SUB * SUB;
+
+/// The pieces of a bucket whose middles lie in one of its sub-cells: `pieces[start..ends[4]]`
+/// of the bucket, sorted by [`Facing`] class (class `c` ends at `ends[c]`), and the box
+/// `[x0, y0, x1, y1]` holding them (empty, `x0 > x1`, if there are none).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Group {
+    pub bx: [Real; 4],
+    pub start: u32,
+    pub ends: [u32; 5],
+}
+
 /// A wall's part inside one bucket, for the LIDAR: the whole wall `a b` (hits are computed on
 /// it, so they are the wall's to the last bit) and the part's end points `p q`, in the
 /// direction `a → b`, which bound the beams that can hit it there.
@@ -202,6 +262,46 @@ pub(crate) struct Piece {
     pub q: Point2,
     pub height: Real,
     pub one_sided: bool,
+}
+
+/// Pieces as lanes, one array per coordinate (so that many are computed at once): the part's
+/// ends `p`, `q`, the wall's start `a` and direction `e = b - a`, height and sidedness.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct PieceLanes {
+    pub px: Vec<Real>,
+    pub py: Vec<Real>,
+    pub qx: Vec<Real>,
+    pub qy: Vec<Real>,
+    pub ax: Vec<Real>,
+    pub ay: Vec<Real>,
+    pub ex: Vec<Real>,
+    pub ey: Vec<Real>,
+    pub height: Vec<Real>,
+    pub one_sided: Vec<bool>,
+}
+
+/// Pieces computed at once from [`PieceLanes`], which hold as many padding pieces past the last.
+pub(crate) const LANES: usize = 4;
+
+impl PieceLanes {
+    /// The lanes of `pieces`, padded (with copies of a zero-length wall at the origin).
+    fn of(pieces: &[Piece]) -> Self {
+        let pad = Piece { a: [0.0; 2], b: [0.0; 2], p: [0.0; 2], q: [0.0; 2], height: 0.0, one_sided: false };
+        let pieces: Vec<Piece> = pieces.iter().copied().chain(std::iter::repeat_n(pad, LANES)).collect();
+        let lane = |f: fn(&Piece) -> Real| pieces.iter().map(f).collect();
+        Self {
+            px: lane(|pc| pc.p[0]),
+            py: lane(|pc| pc.p[1]),
+            qx: lane(|pc| pc.q[0]),
+            qy: lane(|pc| pc.q[1]),
+            ax: lane(|pc| pc.a[0]),
+            ay: lane(|pc| pc.a[1]),
+            ex: lane(|pc| pc.b[0] - pc.a[0]),
+            ey: lane(|pc| pc.b[1] - pc.a[1]),
+            height: lane(|pc| pc.height),
+            one_sided: pieces.iter().map(|pc| pc.one_sided).collect(),
+        }
+    }
 }
 
 /// Which side a piece can be seen from, for skipping a bucket's back faces wholesale: the
@@ -295,6 +395,26 @@ mod tests {
     }
 
     #[test]
+    fn group_order_is_nearest_first() {
+        let idx = SegmentIndex::new(vec![Segment::new([0.0, 0.0], [4.0, 4.0], 1.0)], 2.0).unwrap();
+        for (point, i, j) in [([0.3, 0.2], 0, 0), ([-5.0, 1.7], 0, 0), ([3.9, 2.1], 1, 1), ([10.0, -3.0], 1, 0), ([1.1, 2.9], 0, 1)] {
+            let order = idx.group_order(i, j, point);
+            let mut sorted = *order;
+            sorted.sort();
+            assert_eq!(sorted.to_vec(), (0..GROUPS as u8).collect::<Vec<_>>());
+            // distances from the point to the sub-cell centres never fall along the order
+            // for a point inside the bucket (or level with one of its sub-cells)
+            let sub = 2.0 / SUB as Real;
+            let d = |g: u8| {
+                let c = [i as Real * 2.0 + ((g as usize % SUB) as Real + 0.5) * sub, j as Real * 2.0 + ((g as usize / SUB) as Real + 0.5) * sub];
+                (c[0] - point[0]).hypot(c[1] - point[1])
+            };
+            assert!(d(order[0]) <= d(order[GROUPS - 1]), "{point:?}: {order:?}");
+            assert!((0..GROUPS).all(|k| d(order[0]) <= d(k as u8)), "{point:?}: {order:?}");
+        }
+    }
+
+    #[test]
     fn facing_classes_agree_with_faces() {
         let walls = vec![
             Segment::one_sided([0.0, 0.0], [0.0, 2.0], 1.0),
@@ -318,21 +438,55 @@ mod tests {
                 Facing::Any => {}
             }
         }
-        // sorted by class within each bucket, with the class ends
-        let idx = SegmentIndex::new(walls, 10.0).unwrap();
-        let (pieces, _, ends) = idx.bucket_pieces(0, 0);
-        assert_eq!(ends, [1, 2, 3, 4]);
+        // sorted by class within each group, with the class ends
+        let idx = SegmentIndex::new(walls, 20.0).unwrap();
+        let (pieces, _, groups, _) = idx.bucket_pieces(0, 0);
+        assert_eq!(groups[0], Group { bx: [0.0, 0.0, 2.0, 7.0], start: 0, ends: [1, 2, 3, 4, 6] });
+        assert!(groups[1..].iter().all(|g| g.start == 6 && g.ends == [6; 5] && g.bx[0] > g.bx[2]));
         assert!(pieces.windows(2).all(|w| Facing::of(&w[0]) as u8 <= Facing::of(&w[1]) as u8));
     }
 
     fn check_pieces(walls: &[Segment], cell: Real) {
         let idx = SegmentIndex::new(walls.to_vec(), cell).unwrap();
         let (nx, ny) = idx.dims();
+        // the groups split each bucket's pieces by the sub-cell of their middles, and hold them
+        for j in 0..ny {
+            for i in 0..nx {
+                let (pieces, _, groups, start) = idx.bucket_pieces(i, j);
+                // (the index's lanes run on into the next bucket's; a bucket's own end in padding)
+                let (l, r) = (idx.lanes(), start..start + pieces.len() + LANES);
+                let cut = |v: &Vec<Real>| v[r.clone()].to_vec();
+                let lanes = PieceLanes { px: cut(&l.px), py: cut(&l.py), qx: cut(&l.qx), qy: cut(&l.qy), ax: cut(&l.ax), ay: cut(&l.ay), ex: cut(&l.ex), ey: cut(&l.ey), height: cut(&l.height), one_sided: l.one_sided[r.clone()].to_vec() };
+                let own = PieceLanes::of(pieces);
+                let n = pieces.len();
+                assert_eq!((&lanes.px[..n], &lanes.py[..n], &lanes.qx[..n], &lanes.qy[..n]), (&own.px[..n], &own.py[..n], &own.qx[..n], &own.qy[..n]));
+                assert_eq!((&lanes.ax[..n], &lanes.ay[..n], &lanes.ex[..n], &lanes.ey[..n]), (&own.ax[..n], &own.ay[..n], &own.ex[..n], &own.ey[..n]));
+                assert_eq!((&lanes.height[..n], &lanes.one_sided[..n]), (&own.height[..n], &own.one_sided[..n]));
+                assert_eq!(own.px.len(), n + LANES);
+                assert!(pieces.iter().zip(&lanes.ex).all(|(pc, &ex)| ex == pc.b[0] - pc.a[0]));
+                let mut from = 0;
+                for (g, grp) in groups.iter().enumerate() {
+                    assert_eq!(grp.start as usize, from);
+                    assert!(grp.ends.windows(2).all(|e| e[0] <= e[1]));
+                    for (k, pc) in pieces.iter().enumerate().take(grp.ends[4] as usize).skip(from) {
+                        let c = grp.ends.iter().position(|&e| k < e as usize).unwrap();
+                        assert_eq!(Facing::of(pc) as usize, c);
+                        let sub = cell / SUB as Real;
+                        let m = [(pc.p[0] + pc.q[0]) / 2.0, (pc.p[1] + pc.q[1]) / 2.0];
+                        let (sx, sy) = (idx.origin()[0] + i as Real * cell + (g % SUB) as Real * sub, idx.origin()[1] + j as Real * cell + (g / SUB) as Real * sub);
+                        assert!(m[0] >= sx - 1e-6 && m[0] <= sx + sub + 1e-6 && m[1] >= sy - 1e-6 && m[1] <= sy + sub + 1e-6, "{m:?} off group {g} of ({i}, {j})");
+                        assert!(pc.p[0].min(pc.q[0]) >= grp.bx[0] && pc.p[0].max(pc.q[0]) <= grp.bx[2] && pc.p[1].min(pc.q[1]) >= grp.bx[1] && pc.p[1].max(pc.q[1]) <= grp.bx[3]);
+                    }
+                    from = grp.ends[4] as usize;
+                }
+                assert_eq!(from, pieces.len());
+            }
+        }
         for (k, w) in walls.iter().enumerate() {
             let mut covered = 0.0;
             for j in 0..ny {
                 for i in 0..nx {
-                    let (pieces, bx, _) = idx.bucket_pieces(i, j);
+                    let (pieces, bx, _, _) = idx.bucket_pieces(i, j);
                     let (x0, y0) = (idx.origin()[0] + i as Real * cell, idx.origin()[1] + j as Real * cell);
                     for pc in pieces.iter().filter(|pc| pc.a == w.a && pc.b == w.b) {
                         for v in [pc.p, pc.q] {

@@ -8,7 +8,7 @@ mod cspace;
 pub mod generate;
 mod geometry;
 pub mod grid;
-mod index;
+pub(crate) mod index;
 mod map;
 mod moving;
 pub mod preset;
