@@ -14,7 +14,7 @@ use rand::Rng;
 use super::lidar::{seg_origin_distance, Lidar, Scan};
 use crate::error::Result;
 use crate::math::Real;
-use crate::world::index::PieceLanes;
+use crate::world::index::{Piece, PieceLanes};
 use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
@@ -188,6 +188,46 @@ impl Lidar {
         }
     }
 
+    /// Sweeps those of `pieces` that may be seen from the sensor at `sp` (`sin_cos` its yaw's)
+    /// and are not occluded, their beams being `beams` from `b0` (see [`Lidar::piece_beams`]).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn sweep_pieces(&self, pieces: &[Piece], beams: &BeamLanes, b0: usize, sp: Pose2, (s, co): (Real, Real), ranges: &mut [Real], stats: &mut IndexedScanStats) {
+        let c = &self.config;
+        let (planar, zs) = (c.channels == 1, c.mount.z);
+        let to_sensor = |p: [Real; 2]| {
+            let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
+            [co * dx + s * dy, -s * dx + co * dy]
+        };
+        let r = b0..b0 + pieces.len();
+        let (j0s, counts, box2s, keep, collinear) = (&beams.j0[r.clone()], &beams.count[r.clone()], &beams.box2[r.clone()], &beams.keep[r.clone()], &beams.collinear[r]);
+        for (i, pc) in pieces.iter().enumerate() {
+            if !keep[i] {
+                continue;
+            }
+            let (j0, count, box2) = (j0s[i], counts[i], box2s[i]);
+            if collinear[i] {
+                // collinear with the sensor (its beams above are not used)
+                stats.walls_swept += 1;
+                let (a, b, p, q) = (to_sensor(pc.a), to_sensor(pc.b), to_sensor(pc.p), to_sensor(pc.q));
+                self.sweep_piece(a, b, p, q, pc.height, box2.sqrt(), zs, ranges);
+                continue;
+            }
+            // a planar beam that already hits no farther than the piece's box cannot change
+            if planar && none_beyond_sq(ranges, j0, count, box2) {
+                stats.walls_occluded += 1;
+                continue;
+            }
+            stats.walls_swept += 1;
+            let (a, b) = (to_sensor(pc.a), to_sensor(pc.b));
+            if planar {
+                self.sweep_flat(a, b, j0, count, ranges);
+            } else {
+                self.sweep(a, b, pc.height, j0, count, zs, box2.sqrt(), ranges);
+            }
+        }
+    }
+
     /// What the last [`Lidar::scan_indexed_into`] did (buckets visited and culled, walls swept).
     pub fn last_indexed_stats(&self) -> IndexedScanStats {
         self.indexed.stats
@@ -285,6 +325,14 @@ impl Lidar {
                 continue;
             }
             beams.reserve(pieces.len() + LANES);
+            if pieces.len() < GROUP_TEST_MIN as usize {
+                // a small bucket: all its pieces at once, whether each faces the sensor decided
+                // piece by piece
+                self.piece_beams(lanes, start, pieces.len(), sp, (s, co), &mut beams);
+                stats.walls_visited += pieces.len();
+                self.sweep_pieces(pieces, &beams, 0, sp, (s, co), &mut out.ranges, &mut stats);
+                continue;
+            }
             for &g in index.group_order(i as usize, j as usize, [sp.x, sp.y]) {
                 let grp = &groups[g as usize];
                 if grp.start == grp.ends[4] {
@@ -314,33 +362,7 @@ impl Lidar {
                         continue;
                     }
                     stats.walls_visited += to - from;
-                    let r = from - g0..to - g0;
-                    let (j0s, counts, box2s, keep, collinear) = (&beams.j0[r.clone()], &beams.count[r.clone()], &beams.box2[r.clone()], &beams.keep[r.clone()], &beams.collinear[r]);
-                    for (i, pc) in pieces[from..to].iter().enumerate() {
-                        if !keep[i] {
-                            continue;
-                        }
-                        let (j0, count, box2) = (j0s[i], counts[i], box2s[i]);
-                        if collinear[i] {
-                            // collinear with the sensor (its beams above are not used)
-                            stats.walls_swept += 1;
-                            let (a, b, p, q) = (to_sensor(pc.a), to_sensor(pc.b), to_sensor(pc.p), to_sensor(pc.q));
-                            self.sweep_piece(a, b, p, q, pc.height, box2.sqrt(), zs, &mut out.ranges);
-                            continue;
-                        }
-                        // a planar beam that already hits no farther than the piece's box cannot change
-                        if planar && none_beyond_sq(&out.ranges, j0, count, box2) {
-                            stats.walls_occluded += 1;
-                            continue;
-                        }
-                        stats.walls_swept += 1;
-                        let (a, b) = (to_sensor(pc.a), to_sensor(pc.b));
-                        if planar {
-                            self.sweep_flat(a, b, j0, count, &mut out.ranges);
-                        } else {
-                            self.sweep(a, b, pc.height, j0, count, zs, box2.sqrt(), &mut out.ranges);
-                        }
-                    }
+                    self.sweep_pieces(&pieces[from..to], &beams, from - g0, sp, (s, co), &mut out.ranges, &mut stats);
                     from = to;
                 }
             }
