@@ -14,7 +14,7 @@ use rand::Rng;
 use super::lidar::{seg_origin_distance, Lidar, Scan};
 use crate::error::Result;
 use crate::math::Real;
-use crate::world::index::{Piece, PieceLanes};
+use crate::world::index::{Piece, PieceLanes, LANES};
 use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
@@ -23,7 +23,7 @@ pub(super) struct IndexedScratch {
     /// Bucket offsets `(di, dj)` sorted by a lower bound of their distance, for `key`.
     offsets: Vec<(i32, i32)>,
     key: (u64, u64, i32),
-    /// Per piece of a class of a group, computed at once (see [`Lidar::piece_beams`]).
+    /// Per piece of a group (or of a small bucket), computed at once (see [`Lidar::piece_beams`]).
     beams: BeamLanes,
     /// What the last scan did.
     stats: IndexedScanStats,
@@ -72,9 +72,6 @@ pub struct IndexedScanStats {
     /// already hits something nearer).
     pub walls_occluded: usize,
 }
-
-/// Pieces whose beams are computed at once (see [`PieceLanes`]'s padding).
-use crate::world::index::LANES;
 
 /// Pieces a group needs for the LIDAR to test whether its box is hidden before reading them.
 const GROUP_TEST_MIN: u32 = 16;
