@@ -119,45 +119,62 @@ fn silhouette(x: Real, y: Real, x0: Real, y0: Real, x1: Real, y1: Real) -> ([Rea
     }
 }
 
-impl Lidar {
-    /// Whether the walls in the box `[x0, y0, x1, y1]` (not empty) cannot be seen from the
-    /// sensor at `sp` (`sin_cos` its yaw's): the box is out of range or, for a planar scan seen
-    /// from outside the box, every beam through it already hits something no farther than it.
+/// The sensor's pose in the world, with its yaw's sine and cosine.
+#[derive(Debug, Clone, Copy)]
+struct SensorFrame {
+    x: Real,
+    y: Real,
+    s: Real,
+    c: Real,
+}
+
+impl SensorFrame {
+    fn new(sp: Pose2) -> Self {
+        let (s, c) = sp.yaw.sin_cos();
+        Self { x: sp.x, y: sp.y, s, c }
+    }
+
+    /// The world point `p` in the sensor's frame.
     #[inline(always)]
-    fn box_hidden(&self, [x0, y0, x1, y1]: [Real; 4], sp: Pose2, (s, co): (Real, Real), ranges: &[Real]) -> bool {
-        let ddx = (x0 - sp.x).max(0.0).max(sp.x - x1);
-        let ddy = (y0 - sp.y).max(0.0).max(sp.y - y1);
-        let dmin = (ddx * ddx + ddy * ddy).sqrt();
-        if dmin > self.config.max_range {
-            return true;
-        }
+    fn point(&self, p: [Real; 2]) -> [Real; 2] {
+        let (dx, dy) = (p[0] - self.x, p[1] - self.y);
+        [self.c * dx + self.s * dy, -self.s * dx + self.c * dy]
+    }
+
+    /// Distance from the sensor to the box `[x0, y0, x1, y1]` (0 inside it).
+    #[inline(always)]
+    fn box_distance(&self, [x0, y0, x1, y1]: [Real; 4]) -> Real {
+        let ddx = (x0 - self.x).max(0.0).max(self.x - x1);
+        let ddy = (y0 - self.y).max(0.0).max(self.y - y1);
+        (ddx * ddx + ddy * ddy).sqrt()
+    }
+}
+
+impl Lidar {
+    /// Whether the walls in the box `[x0, y0, x1, y1]` (not empty, at `dmin` from the sensor
+    /// `f`) are hidden: for a planar scan seen from outside the box, every beam through it
+    /// already hits something no farther than the box.
+    #[inline(always)]
+    fn box_hidden(&self, [x0, y0, x1, y1]: [Real; 4], dmin: Real, f: &SensorFrame, ranges: &[Real]) -> bool {
         if self.config.channels > 1 || dmin == 0.0 {
             return false;
         }
         // seen from outside, the box spans the angle between its two silhouette corners (the
         // others lie between them)
-        let to_sensor = |p: [Real; 2]| {
-            let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
-            [co * dx + s * dy, -s * dx + co * dy]
-        };
-        let (p, q) = silhouette(sp.x, sp.y, x0, y0, x1, y1);
-        let (a, b) = (to_sensor(p), to_sensor(q));
+        let (p, q) = silhouette(f.x, f.y, x0, y0, x1, y1);
+        let (a, b) = (f.point(p), f.point(q));
         let cr = cross2(a, b);
         let (j0, count) = self.wall_beams(a, b, cr);
         cr != 0.0 && none_beyond(ranges, j0, count, dmin)
     }
 
-    /// The [`BeamLanes`] of the `m` pieces of `l` from `k0` seen from the sensor at `sp`
-    /// (`sin_cos` its yaw's), written to `out` from its start: the same arithmetic as piece by
+    /// The [`BeamLanes`] of the `m` pieces of `l` from `k0` seen from the sensor `f`, written
+    /// to `out` from its start: the same arithmetic as piece by
     /// piece, in blocks of [`LANES`] (past the last piece, `l`'s padding is computed and ignored).
     #[inline(always)]
-    fn piece_beams(&self, l: &PieceLanes, k0: usize, m: usize, sp: Pose2, (s, co): (Real, Real), out: &mut BeamLanes) {
+    fn piece_beams(&self, l: &PieceLanes, k0: usize, m: usize, f: &SensorFrame, out: &mut BeamLanes) {
         let c = &self.config;
         let (planar, zs, max2) = (c.channels == 1, c.mount.z, c.max_range * c.max_range);
-        let to_sensor = |x: Real, y: Real| {
-            let (dx, dy) = (x - sp.x, y - sp.y);
-            [co * dx + s * dy, -s * dx + co * dy]
-        };
         for blk in 0..m.div_ceil(LANES) {
             let (k, o) = (k0 + blk * LANES, blk * LANES);
             let lane = |v: &[Real]| -> [Real; LANES] { v[k..k + LANES].try_into().unwrap() };
@@ -165,13 +182,13 @@ impl Lidar {
             let one_sided: [bool; LANES] = l.one_sided[k..k + LANES].try_into().unwrap();
             let (mut j0s, mut counts, mut box2s, mut keep, mut collinear) = ([0i64; LANES], [0usize; LANES], [0.0; LANES], [false; LANES], [false; LANES]);
             for i in 0..LANES {
-                let faces = !one_sided[i] | (cross2([ex[i], ey[i]], [sp.x - ax[i], sp.y - ay[i]]) < 0.0);
+                let faces = !one_sided[i] | (cross2([ex[i], ey[i]], [f.x - ax[i], f.y - ay[i]]) < 0.0);
                 // squared distance to the piece's box: a lower bound of the piece's (exact for
                 // the axis-aligned walls of grid maps), without division or root
-                let bx = (px[i].min(qx[i]) - sp.x).max(0.0).max(sp.x - px[i].max(qx[i]));
-                let by = (py[i].min(qy[i]) - sp.y).max(0.0).max(sp.y - py[i].max(qy[i]));
+                let bx = (px[i].min(qx[i]) - f.x).max(0.0).max(f.x - px[i].max(qx[i]));
+                let by = (py[i].min(qy[i]) - f.y).max(0.0).max(f.y - py[i].max(qy[i]));
                 box2s[i] = bx * bx + by * by;
-                let (p, q) = (to_sensor(px[i], py[i]), to_sensor(qx[i], qy[i]));
+                let (p, q) = (f.point([px[i], py[i]]), f.point([qx[i], qy[i]]));
                 let cr = cross2(p, q);
                 (j0s[i], counts[i]) = self.wall_beams(p, q, cr);
                 keep[i] = faces & !(planar & (zs > height[i])) & (box2s[i] <= max2);
@@ -185,17 +202,12 @@ impl Lidar {
         }
     }
 
-    /// Sweeps those of `pieces` that may be seen from the sensor at `sp` (`sin_cos` its yaw's)
-    /// and are not occluded, their beams being `beams` from `b0` (see [`Lidar::piece_beams`]).
-    #[allow(clippy::too_many_arguments)]
+    /// Sweeps those of `pieces` that may be seen from the sensor `f` and are not occluded,
+    /// their beams being `beams` from `b0` (see [`Lidar::piece_beams`]).
     #[inline(always)]
-    fn sweep_pieces(&self, pieces: &[Piece], beams: &BeamLanes, b0: usize, sp: Pose2, (s, co): (Real, Real), ranges: &mut [Real], stats: &mut IndexedScanStats) {
+    fn sweep_pieces(&self, pieces: &[Piece], beams: &BeamLanes, b0: usize, f: &SensorFrame, ranges: &mut [Real], stats: &mut IndexedScanStats) {
         let c = &self.config;
         let (planar, zs) = (c.channels == 1, c.mount.z);
-        let to_sensor = |p: [Real; 2]| {
-            let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
-            [co * dx + s * dy, -s * dx + co * dy]
-        };
         let r = b0..b0 + pieces.len();
         let (j0s, counts, box2s, keep, collinear) = (&beams.j0[r.clone()], &beams.count[r.clone()], &beams.box2[r.clone()], &beams.keep[r.clone()], &beams.collinear[r]);
         for (i, pc) in pieces.iter().enumerate() {
@@ -206,7 +218,7 @@ impl Lidar {
             if collinear[i] {
                 // collinear with the sensor (its beams above are not used)
                 stats.walls_swept += 1;
-                let (a, b, p, q) = (to_sensor(pc.a), to_sensor(pc.b), to_sensor(pc.p), to_sensor(pc.q));
+                let (a, b, p, q) = (f.point(pc.a), f.point(pc.b), f.point(pc.p), f.point(pc.q));
                 self.sweep_piece(a, b, p, q, pc.height, box2.sqrt(), zs, ranges);
                 continue;
             }
@@ -216,7 +228,7 @@ impl Lidar {
                 continue;
             }
             stats.walls_swept += 1;
-            let (a, b) = (to_sensor(pc.a), to_sensor(pc.b));
+            let (a, b) = (f.point(pc.a), f.point(pc.b));
             if planar {
                 self.sweep_flat(a, b, j0, count, ranges);
             } else {
@@ -259,16 +271,12 @@ impl Lidar {
     pub(super) fn sweep_index(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         let c = self.config;
         let kch = c.channels;
-        let (s, co) = sp.yaw.sin_cos();
-        let to_sensor = |p: [Real; 2]| {
-            let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
-            [co * dx + s * dy, -s * dx + co * dy]
-        };
+        let f = SensorFrame::new(sp);
         let zs = c.mount.z;
         let planar = kch == 1;
         let mut scratch = std::mem::take(&mut self.indexed);
         for seg in extra.iter().filter(|s| s.faces([sp.x, sp.y])) {
-            let (a, b) = (to_sensor(seg.a), to_sensor(seg.b));
+            let (a, b) = (f.point(seg.a), f.point(seg.b));
             let d = seg_origin_distance(a, b);
             if d <= c.max_range && !(planar && zs > seg.height) {
                 self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
@@ -297,7 +305,6 @@ impl Lidar {
         let origin = index.origin();
         let ci = ((sp.x - origin[0]) / cell).floor() as i64;
         let cj = ((sp.y - origin[1]) / cell).floor() as i64;
-        let max2 = c.max_range * c.max_range;
         let mut stats = IndexedScanStats::default();
         let mut beams = std::mem::take(&mut scratch.beams);
         let lanes = index.lanes();
@@ -310,14 +317,14 @@ impl Lidar {
             if pieces.is_empty() {
                 continue;
             }
-            let [x0, y0, x1, y1] = bucket_box;
-            let ddx = (x0 - sp.x).max(0.0).max(sp.x - x1);
-            let ddy = (y0 - sp.y).max(0.0).max(sp.y - y1);
-            if ddx * ddx + ddy * ddy > max2 {
+            let dmin = f.box_distance(bucket_box);
+            if dmin > c.max_range {
                 continue;
             }
             stats.buckets += 1;
-            if self.box_hidden(bucket_box, sp, (s, co), &out.ranges) {
+            // occlusion culling, away from the sensor: skip the bucket if every beam through
+            // the box of its pieces already hits something no farther than the box
+            if self.box_hidden(bucket_box, dmin, &f, &out.ranges) {
                 stats.buckets_occluded += 1;
                 continue;
             }
@@ -325,9 +332,9 @@ impl Lidar {
             if pieces.len() < GROUP_TEST_MIN as usize {
                 // a small bucket: all its pieces at once, whether each faces the sensor decided
                 // piece by piece
-                self.piece_beams(lanes, start, pieces.len(), sp, (s, co), &mut beams);
+                self.piece_beams(lanes, start, pieces.len(), &f, &mut beams);
                 stats.walls_visited += pieces.len();
-                self.sweep_pieces(pieces, &beams, 0, sp, (s, co), &mut out.ranges, &mut stats);
+                self.sweep_pieces(pieces, &beams, 0, &f, &mut out.ranges, &mut stats);
                 continue;
             }
             for &g in index.group_order(i as usize, j as usize, [sp.x, sp.y]) {
@@ -338,9 +345,12 @@ impl Lidar {
                 // occlusion culling, away from the sensor: skip the group if every beam through
                 // the box of its pieces already hits something no farther than the box
                 // (a group of a few pieces is cheaper read than tested)
-                if grp.ends[4] - grp.start >= GROUP_TEST_MIN && self.box_hidden(grp.bx, sp, (s, co), &out.ranges) {
-                    stats.groups_occluded += 1;
-                    continue;
+                if grp.ends[4] - grp.start >= GROUP_TEST_MIN {
+                    let d = f.box_distance(grp.bx);
+                    if d > c.max_range || self.box_hidden(grp.bx, d, &f, &out.ranges) {
+                        stats.groups_occluded += 1;
+                        continue;
+                    }
                 }
                 let [x0, y0, x1, y1] = grp.bx;
                 // the pieces that face the sensor, are tall enough and in range, without
@@ -350,7 +360,7 @@ impl Lidar {
                 // the beams of every piece of the group at once (independent, in lanes of four),
                 // then the sweeps of those in the classes not skipped
                 let (g0, g1) = (grp.start as usize, grp.ends[4] as usize);
-                self.piece_beams(lanes, start + g0, g1 - g0, sp, (s, co), &mut beams);
+                self.piece_beams(lanes, start + g0, g1 - g0, &f, &mut beams);
                 let mut from = g0;
                 for (&away, &to) in away.iter().zip(&grp.ends) {
                     let to = to as usize;
@@ -359,7 +369,7 @@ impl Lidar {
                         continue;
                     }
                     stats.walls_visited += to - from;
-                    self.sweep_pieces(&pieces[from..to], &beams, from - g0, sp, (s, co), &mut out.ranges, &mut stats);
+                    self.sweep_pieces(&pieces[from..to], &beams, from - g0, &f, &mut out.ranges, &mut stats);
                     from = to;
                 }
             }
