@@ -418,7 +418,7 @@ impl Lidar {
     /// [`Lidar::sweep`] for a planar ring, without branches but for walls parallel to a beam;
     /// more than a few beams go over contiguous runs, so that the divisions run several to an
     /// instruction.
-    #[inline]
+    #[inline(always)]
     pub(super) fn sweep_flat(&self, a: [Real; 2], b: [Real; 2], j0: i64, count: usize, best: &mut [Real]) {
         let n = self.config.columns;
         let i0 = (j0 & (n as i64 - 1)) as usize;
