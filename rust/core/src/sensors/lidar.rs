@@ -590,9 +590,10 @@ pub(super) fn fast_atan2(y: Real, x: Real) -> Real {
     use std::f64::consts::{FRAC_PI_2, PI};
     let (ax, ay) = (x.abs(), y.abs());
     let steep = ay > ax;
-    let (mn, mx) = (ax.min(ay), ax.max(ay));
+    // (as selects, one instruction each: `min` and `max` would also order NaNs)
+    let (mn, mx) = if steep { (ax, ay) } else { (ay, ax) };
     // 0 at the origin (0 / MIN_POSITIVE)
-    let q = mn / mx.max(Real::MIN_POSITIVE);
+    let q = mn / if mx > Real::MIN_POSITIVE { mx } else { Real::MIN_POSITIVE };
     let s = q * q;
     let mut r = (((-0.013_480_470 * s + 0.057_477_314) * s - 0.121_239_071) * s + 0.195_635_925) * s - 0.332_994_597;
     r = (r * s + 0.999_995_630) * q;

@@ -104,6 +104,26 @@ fn none_beyond_sq(ranges: &[Real], j0: i64, count: usize, d2: Real) -> bool {
     true
 }
 
+/// The lesser of `a` and `b` (finite), as one instruction.
+#[inline(always)]
+fn min(a: Real, b: Real) -> Real {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The greater of `a` and `b` (finite), as one instruction.
+#[inline(always)]
+fn max(a: Real, b: Real) -> Real {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
 /// The two corners of the box `[x0, x1] × [y0, y1]` between which it lies as seen from
 /// `(x, y)` outside it: its angular extent is the angle between them.
 #[inline]
@@ -175,18 +195,30 @@ impl Lidar {
     fn piece_beams(&self, l: &PieceLanes, k0: usize, m: usize, f: &SensorFrame, out: &mut BeamLanes) {
         let c = &self.config;
         let (planar, zs, max2) = (c.channels == 1, c.mount.z, c.max_range * c.max_range);
-        for blk in 0..m.div_ceil(LANES) {
-            let (k, o) = (k0 + blk * LANES, blk * LANES);
-            let lane = |v: &[Real]| -> [Real; LANES] { v[k..k + LANES].try_into().unwrap() };
-            let (px, py, qx, qy, ax, ay, ex, ey, height) = (lane(&l.px), lane(&l.py), lane(&l.qx), lane(&l.qy), lane(&l.ax), lane(&l.ay), lane(&l.ex), lane(&l.ey), lane(&l.height));
-            let one_sided: [bool; LANES] = l.one_sided[k..k + LANES].try_into().unwrap();
+        let nb = m.div_ceil(LANES);
+        let len = nb * LANES;
+        // the blocks, every lane sliced to the same length once (no bounds checks inside)
+        fn blocks(v: &[Real], r: std::ops::Range<usize>) -> &[[Real; LANES]] {
+            v[r].as_chunks::<LANES>().0
+        }
+        let r = k0..k0 + len;
+        let (px, py, qx, qy, ax, ay) = (blocks(&l.px, r.clone()), blocks(&l.py, r.clone()), blocks(&l.qx, r.clone()), blocks(&l.qy, r.clone()), blocks(&l.ax, r.clone()), blocks(&l.ay, r.clone()));
+        let (ex, ey, height) = (blocks(&l.ex, r.clone()), blocks(&l.ey, r.clone()), blocks(&l.height, r));
+        let one_sided = l.one_sided[k0..k0 + len].as_chunks::<LANES>().0;
+        let j0_out = out.j0[..len].as_chunks_mut::<LANES>().0;
+        let count_out = out.count[..len].as_chunks_mut::<LANES>().0;
+        let box2_out = out.box2[..len].as_chunks_mut::<LANES>().0;
+        let keep_out = out.keep[..len].as_chunks_mut::<LANES>().0;
+        let collinear_out = out.collinear[..len].as_chunks_mut::<LANES>().0;
+        for blk in 0..nb {
+            let (px, py, qx, qy, ax, ay, ex, ey, height, one_sided) = (&px[blk], &py[blk], &qx[blk], &qy[blk], &ax[blk], &ay[blk], &ex[blk], &ey[blk], &height[blk], &one_sided[blk]);
             let (mut j0s, mut counts, mut box2s, mut keep, mut collinear) = ([0i64; LANES], [0usize; LANES], [0.0; LANES], [false; LANES], [false; LANES]);
             for i in 0..LANES {
                 let faces = !one_sided[i] | (cross2([ex[i], ey[i]], [f.x - ax[i], f.y - ay[i]]) < 0.0);
                 // squared distance to the piece's box: a lower bound of the piece's (exact for
                 // the axis-aligned walls of grid maps), without division or root
-                let bx = (px[i].min(qx[i]) - f.x).max(0.0).max(f.x - px[i].max(qx[i]));
-                let by = (py[i].min(qy[i]) - f.y).max(0.0).max(f.y - py[i].max(qy[i]));
+                let bx = max(max(min(px[i], qx[i]) - f.x, 0.0), f.x - max(px[i], qx[i]));
+                let by = max(max(min(py[i], qy[i]) - f.y, 0.0), f.y - max(py[i], qy[i]));
                 box2s[i] = bx * bx + by * by;
                 let (p, q) = (f.point([px[i], py[i]]), f.point([qx[i], qy[i]]));
                 let cr = cross2(p, q);
@@ -194,11 +226,11 @@ impl Lidar {
                 keep[i] = faces & !(planar & (zs > height[i])) & (box2s[i] <= max2);
                 collinear[i] = cr == 0.0;
             }
-            out.j0[o..o + LANES].copy_from_slice(&j0s);
-            out.count[o..o + LANES].copy_from_slice(&counts);
-            out.box2[o..o + LANES].copy_from_slice(&box2s);
-            out.keep[o..o + LANES].copy_from_slice(&keep);
-            out.collinear[o..o + LANES].copy_from_slice(&collinear);
+            j0_out[blk] = j0s;
+            count_out[blk] = counts;
+            box2_out[blk] = box2s;
+            keep_out[blk] = keep;
+            collinear_out[blk] = collinear;
         }
     }
 
