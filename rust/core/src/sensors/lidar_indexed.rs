@@ -5,7 +5,8 @@
 //! group of pieces (those of one of its sub-cells, nearest sub-cell first) that is hidden so,
 //! and every piece whose beams all already hit something no farther than the piece's box
 //! (occlusion culling, beam by beam). Per group, the beams of all its pieces are computed at
-//! once, in lanes, before any is swept. Same ranges as [`Lidar::scan_into`] over all
+//! once, in lanes, before any is swept (only for the classes of pieces that may face the
+//! sensor). Same ranges as [`Lidar::scan_into`] over all
 //! walls (culling only skips walls that cannot be seen), bit for bit but where a beam meets
 //! two walls at a corner and the two scans round differently which is first.
 
@@ -389,20 +390,30 @@ impl Lidar {
                 // branches; a class of axis-aligned one-sided pieces that all face away is not
                 // read at all (a wall at x = w facing +x is seen only from x > w ≥ x0, and so on)
                 let away = [sp.x <= x0, sp.x >= x1, sp.y <= y0, sp.y >= y1, false];
-                // the beams of every piece of the group at once (independent, in lanes of four),
-                // then the sweeps of those in the classes not skipped
-                let (g0, g1) = (grp.start as usize, grp.ends[4] as usize);
-                self.piece_beams(lanes, start + g0, g1 - g0, &f, &mut beams);
-                let mut from = g0;
+                // the classes not skipped, in runs of consecutive classes (at most three, an
+                // away class between each two)
+                let (mut runs, mut nr) = ([(0, 0); 3], 0);
+                let (mut from, mut run) = (grp.start as usize, grp.start as usize);
                 for (&away, &to) in away.iter().zip(&grp.ends) {
-                    let to = to as usize;
-                    if away || to == from {
-                        from = to;
-                        continue;
+                    if away {
+                        if from > run {
+                            runs[nr] = (run, from);
+                            nr += 1;
+                        }
+                        run = to as usize;
                     }
-                    stats.walls_visited += to - from;
-                    self.sweep_pieces(&pieces[from..to], &beams, from - g0, &f, &mut out.ranges, &mut stats);
-                    from = to;
+                    from = to as usize;
+                }
+                if from > run {
+                    runs[nr] = (run, from);
+                    nr += 1;
+                }
+                // per run, the beams of all its pieces at once (independent, in lanes of
+                // four), then their sweeps
+                for &(a, b) in &runs[..nr] {
+                    self.piece_beams(lanes, start + a, b - a, &f, &mut beams);
+                    stats.walls_visited += b - a;
+                    self.sweep_pieces(&pieces[a..b], &beams, 0, &f, &mut out.ranges, &mut stats);
                 }
             }
         }
