@@ -236,12 +236,12 @@ impl Lidar {
     }
 
     /// Sweeps those of `pieces` that may be seen from the sensor `f` and are not occluded,
-    /// their beams being `beams` from `b0` (see [`Lidar::piece_beams`]).
+    /// their beams being the first of `beams` (see [`Lidar::piece_beams`]).
     #[inline(always)]
-    fn sweep_pieces(&self, pieces: &[Piece], beams: &BeamLanes, b0: usize, f: &SensorFrame, ranges: &mut [Real], stats: &mut IndexedScanStats) {
+    fn sweep_pieces(&self, pieces: &[Piece], beams: &BeamLanes, f: &SensorFrame, ranges: &mut [Real], stats: &mut IndexedScanStats) {
         let c = &self.config;
         let (planar, zs) = (c.channels == 1, c.mount.z);
-        let r = b0..b0 + pieces.len();
+        let r = 0..pieces.len();
         let (j0s, counts, box2s, keep, collinear) = (&beams.j0[r.clone()], &beams.count[r.clone()], &beams.box2[r.clone()], &beams.keep[r.clone()], &beams.collinear[r]);
         for (i, pc) in pieces.iter().enumerate() {
             if !keep[i] {
@@ -367,7 +367,7 @@ impl Lidar {
                 // piece by piece
                 self.piece_beams(lanes, start, pieces.len(), &f, &mut beams);
                 stats.walls_visited += pieces.len();
-                self.sweep_pieces(pieces, &beams, 0, &f, &mut out.ranges, &mut stats);
+                self.sweep_pieces(pieces, &beams, &f, &mut out.ranges, &mut stats);
                 continue;
             }
             for &g in index.group_order(i as usize, j as usize, [sp.x, sp.y]) {
@@ -413,7 +413,7 @@ impl Lidar {
                 for &(a, b) in &runs[..nr] {
                     self.piece_beams(lanes, start + a, b - a, &f, &mut beams);
                     stats.walls_visited += b - a;
-                    self.sweep_pieces(&pieces[a..b], &beams, 0, &f, &mut out.ranges, &mut stats);
+                    self.sweep_pieces(&pieces[a..b], &beams, &f, &mut out.ranges, &mut stats);
                 }
             }
         }
