@@ -623,36 +623,49 @@ mod tests {
         assert!(worst < 2e-5, "worst {worst}");
     }
 
-    /// The AVX2 build of the indexed scan gives the portable build's ranges, bit for bit.
+    /// The AVX2 build of the indexed scan gives the portable build's ranges, bit for bit, on a
+    /// generated site and (when `../shared/maps` is beside the repository) on the most
+    /// cluttered real map.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx2_scans_equal_portable_scans() {
         use crate::world::generate::{generate, GeneratorConfig};
-        use crate::world::SegmentIndex;
+        use crate::world::{load_ros_map, RosMapOptions, SegmentIndex};
         if !has_avx2() {
             eprintln!("SKIPPED: no AVX2 on this CPU");
             return;
         }
         let site = generate(4, &GeneratorConfig::default()).unwrap();
-        let walls = site.scenario.map.segments;
-        let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        let mut worlds = vec![("generated", site.scenario.map.segments, site.waypoints.iter().take(12).copied().collect::<Vec<_>>())];
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps/g4s_office");
+        let yaml = std::fs::read_dir(&dir).map(|d| d.flatten().map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "yaml"))).ok().flatten();
+        if let Some(yaml) = yaml {
+            let m = load_ros_map(&yaml, &RosMapOptions::default()).unwrap();
+            let s = m.scenario.start;
+            worlds.push(("g4s_office", m.scenario.map.segments, (0..12).map(|k| [s.x + 0.3 * k as Real, s.y - 0.1 * k as Real]).collect()));
+        } else {
+            eprintln!("real map skipped: no map in {}", dir.display());
+        }
         let mut rng = ChaCha8Rng::seed_from_u64(2);
-        for channels in [1, 16] {
-            let mut l = Lidar::new(LidarConfig { channels, range_noise_std: 0.0, ..Default::default() }).unwrap();
-            for (k, w) in site.waypoints.iter().enumerate().take(12) {
-                let pose = Pose2::new(w[0] + rng.random_range(-0.2..0.2), w[1], 0.7 * k as Real);
-                let mut scans: Vec<Scan> = (0..4).map(|_| Scan::default()).collect();
-                for s in scans.iter_mut() {
-                    l.begin_scan(pose, 0.0, s).unwrap();
+        for (name, walls, points) in worlds {
+            let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+            for channels in [1, 16] {
+                let mut l = Lidar::new(LidarConfig { channels, range_noise_std: 0.0, ..Default::default() }).unwrap();
+                for (k, w) in points.iter().enumerate() {
+                    let pose = Pose2::new(w[0] + rng.random_range(-0.2..0.2), w[1], 0.7 * k as Real);
+                    let mut scans: Vec<Scan> = (0..4).map(|_| Scan::default()).collect();
+                    for s in scans.iter_mut() {
+                        l.begin_scan(pose, 0.0, s).unwrap();
+                    }
+                    let sp = l.sensor_pose(pose);
+                    l.sweep_walls(&[&walls], sp, &mut scans[0]);
+                    l.sweep_index(&index, &[], sp, &mut scans[2]);
+                    // SAFETY: AVX2 and FMA checked above.
+                    unsafe { l.sweep_index_avx2(&index, &[], sp, &mut scans[3]) };
+                    let bits = |s: &Scan| s.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
+                    assert!(scans[0].ranges.iter().filter(|r| r.is_finite()).count() > 300 * channels);
+                    assert_eq!(bits(&scans[2]), bits(&scans[3]), "{name}: scan_indexed_into, {channels} channels, pose {k}");
                 }
-                let sp = l.sensor_pose(pose);
-                l.sweep_walls(&[&walls], sp, &mut scans[0]);
-                l.sweep_index(&index, &[], sp, &mut scans[2]);
-                // SAFETY: AVX2 and FMA checked above.
-                unsafe { l.sweep_index_avx2(&index, &[], sp, &mut scans[3]) };
-                let bits = |s: &Scan| s.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
-                assert!(scans[0].ranges.iter().filter(|r| r.is_finite()).count() > 300 * channels);
-                assert_eq!(bits(&scans[2]), bits(&scans[3]), "scan_indexed_into, {channels} channels, pose {k}");
             }
         }
     }
