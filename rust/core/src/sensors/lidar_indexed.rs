@@ -162,12 +162,18 @@ impl SensorFrame {
         [self.c * dx + self.s * dy, -self.s * dx + self.c * dy]
     }
 
+    /// Squared distance from the sensor to the box `[x0, y0, x1, y1]` (0 inside it).
+    #[inline(always)]
+    fn box_distance2(&self, [x0, y0, x1, y1]: [Real; 4]) -> Real {
+        let ddx = max(max(x0 - self.x, 0.0), self.x - x1);
+        let ddy = max(max(y0 - self.y, 0.0), self.y - y1);
+        ddx * ddx + ddy * ddy
+    }
+
     /// Distance from the sensor to the box `[x0, y0, x1, y1]` (0 inside it).
     #[inline(always)]
-    fn box_distance(&self, [x0, y0, x1, y1]: [Real; 4]) -> Real {
-        let ddx = (x0 - self.x).max(0.0).max(self.x - x1);
-        let ddy = (y0 - self.y).max(0.0).max(self.y - y1);
-        (ddx * ddx + ddy * ddy).sqrt()
+    fn box_distance(&self, bx: [Real; 4]) -> Real {
+        self.box_distance2(bx).sqrt()
     }
 }
 
@@ -218,9 +224,7 @@ impl Lidar {
                 let faces = !one_sided[i] | (cross2([ex[i], ey[i]], [f.x - ax[i], f.y - ay[i]]) < 0.0);
                 // squared distance to the piece's box: a lower bound of the piece's (exact for
                 // the axis-aligned walls of grid maps), without division or root
-                let bx = max(max(min(px[i], qx[i]) - f.x, 0.0), f.x - max(px[i], qx[i]));
-                let by = max(max(min(py[i], qy[i]) - f.y, 0.0), f.y - max(py[i], qy[i]));
-                box2s[i] = bx * bx + by * by;
+                box2s[i] = f.box_distance2([min(px[i], qx[i]), min(py[i], qy[i]), max(px[i], qx[i]), max(py[i], qy[i])]);
                 let (p, q) = (f.point([px[i], py[i]]), f.point([qx[i], qy[i]]));
                 let cr = cross2(p, q);
                 (j0s[i], counts[i]) = self.wall_beams(p, q, cr);
