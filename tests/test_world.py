@@ -86,6 +86,30 @@ def test_unreachable_map_walls_are_dropped_without_changing_the_scan():
     np.testing.assert_array_equal(pruned.ranges, full.ranges)
 
 
+@pytest.mark.skipif(not MAPS.is_dir(), reason=f"{MAPS} absent (shared maps beside the repository)")
+def test_map_walls_are_simplified_within_the_tolerance():
+    yaml = str(MAPS / "g4s_office" / "g4s_y2.yaml")  # drawn at 45°: every wall a staircase
+    simple = World(ros_map=yaml, range_noise_std=0.0, max_range=10.0)
+    edges = World(ros_map=yaml, range_noise_std=0.0, max_range=10.0, simplify=0)
+    loose = World(ros_map=yaml, range_noise_std=0.0, max_range=10.0, simplify=2.5)
+    assert len(loose.walls) < len(simple.walls) < 0.5 * len(edges.walls)
+    # cell edges are axis-aligned (the map has no yaw); simplified walls mostly are not
+    e = edges.walls
+    assert np.all((e[:, 0] == e[:, 2]) | (e[:, 1] == e[:, 3]))
+    s = simple.walls
+    assert np.mean((s[:, 0] == s[:, 2]) | (s[:, 1] == s[:, 3])) < 0.5
+    # the scans differ by at most the tolerance (1 cell, 5 cm) wherever a beam hits the same
+    # wall in both: compare the beams whose neighbours agree to within a cell
+    a, b = simple.ranges, edges.ranges
+    with np.errstate(invalid="ignore"):
+        both = np.isfinite(a) & np.isfinite(b) & (np.abs(np.roll(a, 1) - a) < 0.05) & (np.abs(np.roll(b, 1) - b) < 0.05)
+    assert both.mean() > 0.5
+    assert np.median(np.abs(a[both] - b[both])) < 0.025
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match="simplify"):
+            World(ros_map=yaml, simplify=bad)
+
+
 def test_points_are_ranges_in_the_body_frame():
     w = World(preset="constricted_passage", range_noise_std=0.0, mount=(0.2, 0.0, 0.6, 0.0))
     r = w.ranges[0]

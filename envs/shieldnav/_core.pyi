@@ -162,6 +162,7 @@ class World:
         corner_radius: float = 0.0,
         unknown_is_wall: bool = True,
         unreachable_walls: bool = False,
+        simplify: float | None = None,
     ) -> World: ...
     def step(self, vx: float, vy: float, wz: float) -> dict[str, Any]: ...
     @property

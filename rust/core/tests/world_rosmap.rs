@@ -1,5 +1,6 @@
-//! Every map in `<repo>/../shared/maps` loads; its walls lie on occupied-cell boundaries; the
-//! start is inside the building; the LIDAR is exact on it.
+//! Every map in `<repo>/../shared/maps` loads; its walls lie on occupied-cell boundaries (or,
+//! simplified, within the tolerance of them); the start is inside the building; the LIDAR is
+//! exact on it.
 
 use std::path::PathBuf;
 
@@ -18,8 +19,9 @@ fn maps_dir() -> Option<PathBuf> {
     }
 }
 
+/// The maps as loaded by default (walls simplified), with or without unknown cells as walls.
 fn all_maps(unknown_is_wall: bool) -> Vec<(String, RosMap)> {
-    maps_with(RosMapOptions { wall_height: 2.5, unknown_is_wall, unreachable_walls: false })
+    maps_with(RosMapOptions { unknown_is_wall, ..RosMapOptions::default() })
 }
 
 fn maps_with(options: RosMapOptions) -> Vec<(String, RosMap)> {
@@ -69,11 +71,11 @@ fn flood(g: &shieldnav_core::world::OccupancyGrid, start: (usize, usize), solid:
     inside
 }
 
-/// Walls lie on solid-cell boundaries and, unless `unreachable`, face the start's region:
-/// every edge between a region cell and a solid one is a wall and no other edge is; with
-/// `unreachable` every solid boundary edge is.
+/// Walls (not simplified) lie on solid-cell boundaries and, unless `unreachable`, face the
+/// start's region: every edge between a region cell and a solid one is a wall and no other
+/// edge is; with `unreachable` every solid boundary edge is.
 fn check_walls_and_start(unknown_is_wall: bool, unreachable: bool) {
-    for (name, m) in maps_with(RosMapOptions { wall_height: 2.5, unknown_is_wall, unreachable_walls: unreachable }) {
+    for (name, m) in maps_with(RosMapOptions { wall_height: 2.5, unknown_is_wall, unreachable_walls: unreachable, simplify: 0.0 }) {
         let g = &m.grid;
         let solid = |c: Cell| c == Cell::Occupied || (unknown_is_wall && c == Cell::Unknown);
         let start = g.world_to_cell([m.scenario.start.x, m.scenario.start.y]).unwrap();
@@ -195,6 +197,53 @@ fn unreachable_walls_change_no_scan_from_the_region() {
             assert!(a.ranges.iter().filter(|r| r.is_finite()).count() > 1000, "{name}");
             assert_eq!(a.ranges, b.ranges, "{name} at {pose:?}");
         }
+    }
+}
+
+/// Simplified walls (the default) stay within the tolerance of the cell-edge walls, both ways,
+/// are far fewer, and keep every contour closed: at each vertex as many walls start as end,
+/// except where the cell-edge walls themselves start or end unpaired (the image's border).
+#[test]
+fn simplified_walls_stay_within_the_tolerance_and_keep_contours_closed() {
+    use shieldnav_core::world::{Segment, SegmentIndex};
+    use std::collections::HashMap;
+    let raw = maps_with(RosMapOptions { simplify: 0.0, ..RosMapOptions::default() });
+    let tolerance = RosMapOptions::default().simplify;
+    assert!(tolerance > 0.0);
+    for ((name, simple), (_, raw)) in all_maps(true).into_iter().zip(raw) {
+        let (a, b) = (&simple.scenario.map.segments, &raw.scenario.map.segments);
+        let res = raw.grid.resolution;
+        assert!(a.len() * 10 < b.len() * 9, "{name}: {} walls from {}", a.len(), b.len());
+        let reach = tolerance * res * (1.0 + 1e-9) + 1e-12;
+        // every point of one set within the tolerance of the other (sampled at a tenth of a cell)
+        for (from, to, what) in [(a, b, "simplified wall off the cell edges"), (b, a, "cell edge off the simplified walls")] {
+            let mut index = SegmentIndex::new(to.clone(), 1.0).unwrap();
+            let mut near: Vec<Segment> = Vec::new();
+            for s in from {
+                let n = (s.length() / (0.1 * res)).ceil() as usize;
+                for k in 0..=n {
+                    let t = k as f64 / n as f64;
+                    let p = [s.a[0] + t * (s.b[0] - s.a[0]), s.a[1] + t * (s.b[1] - s.a[1])];
+                    index.query_into(p, reach, &mut near);
+                    let d = near.iter().map(|w| w.distance_to_point(p)).fold(f64::INFINITY, f64::min);
+                    assert!(d <= reach, "{name}: {what} at {p:?} by {d} m (tolerance {reach} m)");
+                }
+            }
+        }
+        // same height and sidedness; the contours' open ends unchanged
+        assert!(a.iter().all(|s| s.one_sided && s.height == b[0].height), "{name}");
+        let balance = |walls: &[Segment]| {
+            let mut m: HashMap<(i64, i64), i64> = HashMap::new();
+            for s in walls {
+                let key = |p: [f64; 2]| ((p[0] / res * 8.0).round() as i64, (p[1] / res * 8.0).round() as i64);
+                *m.entry(key(s.a)).or_default() += 1;
+                *m.entry(key(s.b)).or_default() -= 1;
+            }
+            m.retain(|_, v| *v != 0);
+            m
+        };
+        assert_eq!(balance(a), balance(b), "{name}: a contour was opened or joined");
+        eprintln!("{name}: {} cell-edge walls -> {} simplified", b.len(), a.len());
     }
 }
 

@@ -109,13 +109,14 @@ macro_rules! each_field {
 }
 
 /// Keys that are not plain fields.
-const SPECIAL: [&str; 6] = [
+const SPECIAL: [&str; 7] = [
     "shield",
     "action_mode",
     "lidar_mount",
     "site_kind",
     "unknown_is_wall",
     "unreachable_walls",
+    "simplify",
 ];
 
 /// Every key [`episode_config`] accepts.
@@ -215,6 +216,15 @@ pub fn episode_config(
             .extract()
             .map_err(|_| invalid("unreachable_walls", "expected a bool"))?;
     }
+    if let Some(v) = kw.get_item("simplify")? {
+        let t: f64 = v
+            .extract()
+            .map_err(|_| invalid("simplify", "expected a number of cells"))?;
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(invalid("simplify", format!("must be finite and >= 0 cells, got {t}")));
+        }
+        site.ros_map.simplify = t;
+    }
     c.world.lidar.validate().map_err(crate::errors::to_py)?;
     c.world.robot.validate().map_err(crate::errors::to_py)?;
     site.generator.footprint = shieldnav_core::world::Footprint {
@@ -241,5 +251,6 @@ pub fn episode_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("site_kind", "office")?;
     d.set_item("unknown_is_wall", RosMapOptions::default().unknown_is_wall)?;
     d.set_item("unreachable_walls", RosMapOptions::default().unreachable_walls)?;
+    d.set_item("simplify", RosMapOptions::default().simplify)?;
     Ok(d)
 }

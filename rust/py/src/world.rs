@@ -95,7 +95,7 @@ impl PyWorld {
     #[pyo3(signature = (*, preset=None, procedural=None, kind="office", ros_map=None, scenario=None, seed=0, dt=0.02,
         channels=1, columns=1024, min_range=0.1, max_range=20.0, range_noise_std=0.01, dropout=0.0, rate_hz=10.0,
         vertical_fov=(-std::f64::consts::FRAC_PI_4, std::f64::consts::FRAC_PI_4), mount=(0.0, 0.0, 0.5, 0.0),
-        robot_length=1.1, robot_width=0.5, corner_radius=0.0, unknown_is_wall=true, unreachable_walls=false))]
+        robot_length=1.1, robot_width=0.5, corner_radius=0.0, unknown_is_wall=true, unreachable_walls=false, simplify=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -120,6 +120,7 @@ impl PyWorld {
         corner_radius: f64,
         unknown_is_wall: bool,
         unreachable_walls: bool,
+        simplify: Option<f64>,
     ) -> PyResult<Self> {
         let sources = preset.is_some() as u8 + procedural.is_some() as u8 + ros_map.is_some() as u8 + scenario.is_some() as u8;
         if sources != 1 {
@@ -149,7 +150,8 @@ impl PyWorld {
                 } else if let Some(site) = procedural {
                     World::from_procedural(site, &GeneratorConfig { kind, ..Default::default() }, config)
                 } else if let Some(path) = ros_map {
-                    World::from_ros_map(path, &RosMapOptions { unknown_is_wall, unreachable_walls, ..Default::default() }, config)
+                    let simplify = simplify.unwrap_or(RosMapOptions::default().simplify);
+                    World::from_ros_map(path, &RosMapOptions { unknown_is_wall, unreachable_walls, simplify, ..Default::default() }, config)
                 } else {
                     World::from_scenario_file(scenario.unwrap_or_default(), config)
                 }

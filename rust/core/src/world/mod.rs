@@ -4,6 +4,7 @@
 //! LIDAR). Polygons (furniture, pillars) are stored as their edges.
 
 pub(crate) mod bitrow;
+mod contour;
 mod cspace;
 pub mod generate;
 mod geometry;
@@ -19,6 +20,7 @@ mod scenario;
 mod sim;
 pub mod traverse;
 
+pub use contour::simplify_walls;
 pub use geometry::{cross2, norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
 pub use index::SegmentIndex;
 pub use map::StaticMap;

@@ -19,6 +19,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::contour::simplify_walls;
 use super::geometry::Pose2;
 use super::grid::{Cell, OccupancyGrid};
 use super::map::StaticMap;
@@ -227,11 +228,15 @@ pub struct RosMapOptions {
     /// solid pockets and of free space cut off from the start); they change no scan, contact
     /// or clearance of a robot in that region.
     pub unreachable_walls: bool,
+    /// Douglas–Peucker tolerance (cells) of the wall contours: the staircase of cell edges
+    /// that a wall drawn at an angle leaves in the image becomes a straight wall within this
+    /// many cells of it (see [`simplify_walls`](super::simplify_walls)). 0 keeps every cell edge.
+    pub simplify: Real,
 }
 
 impl Default for RosMapOptions {
     fn default() -> Self {
-        Self { wall_height: 2.5, unknown_is_wall: true, unreachable_walls: false }
+        Self { wall_height: 2.5, unknown_is_wall: true, unreachable_walls: false, simplify: 1.0 }
     }
 }
 
@@ -251,7 +256,7 @@ pub fn load_ros_map(yaml: impl AsRef<Path>, options: &RosMapOptions) -> Result<R
     let mut map = StaticMap::new();
     let unknown_is_wall = options.unknown_is_wall;
     let solid = |c: Cell| c == Cell::Occupied || (unknown_is_wall && c == Cell::Unknown);
-    map.segments = if options.unreachable_walls {
+    let walls = if options.unreachable_walls {
         grid.wall_segments(options.wall_height, solid)
     } else {
         let cell = grid.world_to_cell([start.x, start.y]).ok_or_else(|| Error::map_file(yaml, "map", "the start lies off the grid"))?;
@@ -267,6 +272,13 @@ pub fn load_ros_map(yaml: impl AsRef<Path>, options: &RosMapOptions) -> Result<R
         walls.retain(|s| !on_border(s));
         walls
     };
+    // chains break where two solid cells meet only at a corner, in either mode alike
+    let is_solid = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < grid.width && (j as usize) < grid.height && solid(grid.get(i as usize, j as usize));
+    let pinch = |(i, j): (i64, i64)| {
+        let (a, b, c, d) = (is_solid(i - 1, j - 1), is_solid(i, j - 1), is_solid(i - 1, j), is_solid(i, j));
+        a == d && b == c && a != b
+    };
+    map.segments = simplify_walls(&grid, &walls, options.simplify, pinch)?;
     let name = yaml.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let scenario = Scenario::new(name, map, start);
     Ok(RosMap { meta, grid, scenario, start_clearance })
