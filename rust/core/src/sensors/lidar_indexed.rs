@@ -15,7 +15,7 @@ use rand::Rng;
 use super::lidar::{seg_origin_distance, Lidar, Scan};
 use crate::error::Result;
 use crate::math::Real;
-use crate::world::index::{Piece, PieceLanes, LANES};
+use crate::world::index::{Piece, PieceLanes, CLASSES, LANES, SECTORS};
 use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
@@ -75,7 +75,8 @@ pub struct IndexedScanStats {
 }
 
 /// Pieces a group needs for the LIDAR to test whether its box is hidden before reading them.
-const GROUP_TEST_MIN: u32 = 16;
+const GROUP_TEST_MIN: u32 = 8;
+const BUCKET_GROUPS_MIN: u32 = 32;
 
 /// Whether none of the `count` ranges from column `j0` (modulo their number, a power of two)
 /// exceeds `d`.
@@ -239,6 +240,19 @@ impl Lidar {
         }
     }
 
+    /// The beams of `pieces[run]` (the bucket's pieces, whose lanes start at `start`), then
+    /// their sweeps.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn sweep_run(&self, lanes: &PieceLanes, start: usize, pieces: &[Piece], run: std::ops::Range<usize>, f: &SensorFrame, beams: &mut BeamLanes, ranges: &mut [Real], stats: &mut IndexedScanStats) {
+        if run.is_empty() {
+            return;
+        }
+        self.piece_beams(lanes, start + run.start, run.len(), f, beams);
+        stats.walls_visited += run.len();
+        self.sweep_pieces(&pieces[run], beams, f, ranges, stats);
+    }
+
     /// Sweeps those of `pieces` that may be seen from the sensor `f` and are not occluded,
     /// their beams being the first of `beams` (see [`Lidar::piece_beams`]).
     #[inline(always)]
@@ -366,7 +380,7 @@ impl Lidar {
                 continue;
             }
             beams.reserve(pieces.len() + LANES);
-            if pieces.len() < GROUP_TEST_MIN as usize {
+            if pieces.len() < BUCKET_GROUPS_MIN as usize {
                 // a small bucket: all its pieces at once, whether each faces the sensor decided
                 // piece by piece
                 self.piece_beams(lanes, start, pieces.len(), &f, &mut beams);
@@ -376,49 +390,32 @@ impl Lidar {
             }
             for &g in index.group_order(i as usize, j as usize, [sp.x, sp.y]) {
                 let grp = &groups[g as usize];
-                if grp.start == grp.ends[4] {
+                if grp.start == grp.ends[CLASSES - 1] {
                     continue;
                 }
                 // occlusion culling, away from the sensor: skip the group if every beam through
                 // the box of its pieces already hits something no farther than the box
                 // (a group of a few pieces is cheaper read than tested)
-                if grp.ends[4] - grp.start >= GROUP_TEST_MIN {
+                if grp.ends[CLASSES - 1] - grp.start >= GROUP_TEST_MIN {
                     let d = f.box_distance(grp.bx);
                     if d > c.max_range || self.box_hidden(grp.bx, d, &f, &out.ranges) {
                         stats.groups_occluded += 1;
                         continue;
                     }
                 }
-                let [x0, y0, x1, y1] = grp.bx;
                 // the pieces that face the sensor, are tall enough and in range, without
-                // branches; a class of axis-aligned one-sided pieces that all face away is not
-                // read at all (a wall at x = w facing +x is seen only from x > w ≥ x0, and so on)
-                let away = [sp.x <= x0, sp.x >= x1, sp.y <= y0, sp.y >= y1, false];
-                // the classes not skipped, in runs of consecutive classes (at most three, an
-                // away class between each two)
-                let (mut runs, mut nr) = ([(0, 0); 3], 0);
-                let (mut from, mut run) = (grp.start as usize, grp.start as usize);
-                for (&away, &to) in away.iter().zip(&grp.ends) {
-                    if away {
-                        if from > run {
-                            runs[nr] = (run, from);
-                            nr += 1;
-                        }
+                // branches; a class of one-sided pieces that all face away is not read at all
+                // (see `Group::behind`): per run of consecutive classes not skipped, the beams
+                // of all its pieces at once (independent, in lanes of four), then their sweeps
+                let (mut run, mut from) = (grp.start as usize, grp.start as usize);
+                for (k, &to) in grp.ends.iter().enumerate() {
+                    if k < SECTORS && grp.behind(k, sp.x, sp.y) {
+                        self.sweep_run(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
                         run = to as usize;
                     }
                     from = to as usize;
                 }
-                if from > run {
-                    runs[nr] = (run, from);
-                    nr += 1;
-                }
-                // per run, the beams of all its pieces at once (independent, in lanes of
-                // four), then their sweeps
-                for &(a, b) in &runs[..nr] {
-                    self.piece_beams(lanes, start + a, b - a, &f, &mut beams);
-                    stats.walls_visited += b - a;
-                    self.sweep_pieces(&pieces[a..b], &beams, &f, &mut out.ranges, &mut stats);
-                }
+                self.sweep_run(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
             }
         }
         scratch.beams = beams;

@@ -122,19 +122,20 @@ impl SegmentIndex {
                 let f = |v: Real, o: Real| (((v - o) / cell * SUB as Real).floor().max(0.0) as usize).min(SUB - 1);
                 f((pc.p[0] + pc.q[0]) / 2.0, x0) + SUB * f((pc.p[1] + pc.q[1]) / 2.0, y0)
             };
-            mine.sort_by_key(|pc| (sub(pc), Facing::of(pc) as u8));
+            mine.sort_by_key(|pc| (sub(pc), facing_class(pc)));
             let mut from = 0;
             for g in 0..GROUPS {
                 let to = from + mine[from..].partition_point(|pc| sub(pc) <= g);
                 let of = &mine[from..to];
-                let mut ends = [0u32; 5];
+                let mut ends = [0u32; CLASSES];
                 for (c, end) in ends.iter_mut().enumerate() {
-                    *end = (from + of.partition_point(|pc| (Facing::of(pc) as usize) <= c)) as u32;
+                    *end = (from + of.partition_point(|pc| facing_class(pc) <= c)) as u32;
                 }
+                let behind = std::array::from_fn(|k| behind(of, k));
                 let bx = of.iter().fold([Real::INFINITY, Real::INFINITY, Real::NEG_INFINITY, Real::NEG_INFINITY], |b, pc| {
                     [b[0].min(pc.p[0]).min(pc.q[0]), b[1].min(pc.p[1]).min(pc.q[1]), b[2].max(pc.p[0]).max(pc.q[0]), b[3].max(pc.p[1]).max(pc.q[1])]
                 });
-                groups.push(Group { bx, start: from as u32, ends });
+                groups.push(Group { bx, start: from as u32, ends, behind });
                 from = to;
             }
         }
@@ -241,14 +242,26 @@ pub(crate) const SUB: usize = 2;
 /// Groups per bucket.
 pub(crate) const GROUPS: usize = SUB * SUB;
 
-/// The pieces of a bucket whose middles lie in one of its sub-cells: `pieces[start..ends[4]]`
-/// of the bucket, sorted by [`Facing`] class (class `c` ends at `ends[c]`), and the box
-/// `[x0, y0, x1, y1]` holding them (empty, `x0 > x1`, if there are none).
+/// The pieces of a bucket whose middles lie in one of its sub-cells:
+/// `pieces[start..ends[CLASSES - 1]]` of the bucket, sorted by [`facing_class`] (class `c`
+/// ends at `ends[c]`), the box `[x0, y0, x1, y1]` holding them (empty, `x0 > x1`, if there
+/// are none), and per sector class the test of whether a point is behind all its walls (see
+/// [`behind`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Group {
     pub bx: [Real; 4],
     pub start: u32,
-    pub ends: [u32; 5],
+    pub ends: [u32; CLASSES],
+    pub behind: [[Real; 6]; SECTORS],
+}
+
+impl Group {
+    /// Whether the point `(x, y)` sees none of the walls of sector class `k`.
+    #[inline(always)]
+    pub(crate) fn behind(&self, k: usize, x: Real, y: Real) -> bool {
+        let b = &self.behind[k];
+        (x * b[0] + y * b[1] <= b[2]) & (x * b[3] + y * b[4] <= b[5])
+    }
 }
 
 /// A wall's part inside one bucket, for the LIDAR: the whole wall `a b` (hits are computed on
@@ -304,36 +317,50 @@ impl PieceLanes {
     }
 }
 
-/// Which side a piece can be seen from, for skipping a bucket's back faces wholesale: the
-/// free side of a one-sided axis-aligned wall (solid on the left of `a → b`, seen from points
-/// strictly on its right), or any side.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(u8)]
-pub(crate) enum Facing {
-    /// Seen only from `x` greater than the wall's.
-    PlusX = 0,
-    /// Only from smaller `x`.
-    MinusX = 1,
-    /// Only from greater `y`.
-    PlusY = 2,
-    /// Only from smaller `y`.
-    MinusY = 3,
-    /// Two-sided, slanted or a point: decided per piece.
-    Any = 4,
+/// One-sided walls' classes by the direction they face: sectors of 45° about `k · 45°`.
+pub(crate) const SECTORS: usize = 8;
+/// Facing classes: the [`SECTORS`], then two-sided walls and points (decided per piece).
+pub(crate) const CLASSES: usize = SECTORS + 1;
+
+/// The facing class of `pc`: for a one-sided wall (solid on the left of `a → b`, seen only
+/// from points strictly on its right) the sector holding its outward normal `(dy, -dx)`,
+/// otherwise [`SECTORS`].
+pub(crate) fn facing_class(pc: &Piece) -> usize {
+    let (dx, dy) = (pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]);
+    if !pc.one_sided || (dx == 0.0 && dy == 0.0) {
+        return SECTORS;
+    }
+    ((-dx).atan2(dy) / std::f64::consts::FRAC_PI_4).round().rem_euclid(SECTORS as Real) as usize
 }
 
-impl Facing {
-    /// The class of `pc`.
-    pub(crate) fn of(pc: &Piece) -> Self {
+/// For the pieces `of`, all of sector class `k`: their two extreme outward normals `n1`, `n2`
+/// (unit; every other normal lies between them, within the sector) and, less a margin, the
+/// least `m1`, `m2` of `a · n1`, `a · n2` over their walls' starts `a`, as
+/// `[n1x, n1y, m1, n2x, n2y, m2]`. A point `s` with `s · n1 <= m1` and `s · n2 <= m2` sees none
+/// of them: each normal `n` is `λ1 n1 + λ2 n2` with `λ1, λ2 >= 0`, so `(s - a) · n < 0`.
+/// An empty class gets `m = -∞`, which no point passes.
+fn behind(of: &[Piece], k: usize) -> [Real; 6] {
+    let centre = k as Real * std::f64::consts::FRAC_PI_4;
+    let normal = |pc: &Piece| {
         let (dx, dy) = (pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]);
-        match (pc.one_sided, dx == 0.0, dy == 0.0) {
-            (true, true, false) if dy > 0.0 => Facing::PlusX,
-            (true, true, false) => Facing::MinusX,
-            (true, false, true) if dx < 0.0 => Facing::PlusY,
-            (true, false, true) => Facing::MinusY,
-            _ => Facing::Any,
-        }
-    }
+        let l = dx.hypot(dy);
+        [dy / l, -dx / l]
+    };
+    let offset = |pc: &Piece| {
+        let n = normal(pc);
+        let d = n[1].atan2(n[0]) - centre;
+        (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+    };
+    let mine = || of.iter().filter(|pc| facing_class(pc) == k);
+    let (Some(lo), Some(hi)) = (mine().min_by(|x, y| offset(x).total_cmp(&offset(y))), mine().max_by(|x, y| offset(x).total_cmp(&offset(y)))) else {
+        return [0.0, 0.0, Real::NEG_INFINITY, 0.0, 0.0, Real::NEG_INFINITY];
+    };
+    let (n1, n2) = (normal(lo), normal(hi));
+    let least = |n: [Real; 2]| {
+        let m = mine().map(|pc| pc.a[0] * n[0] + pc.a[1] * n[1]).fold(Real::INFINITY, Real::min);
+        m - 1e-9 * (1.0 + m.abs())
+    };
+    [n1[0], n1[1], least(n1), n2[0], n2[1], least(n2)]
 }
 
 /// The part of segment `a b` inside the box `lo`–`hi` (Liang–Barsky), if any; an end inside
@@ -422,26 +449,76 @@ mod tests {
             Segment::one_sided([0.0, 5.0], [1.0, 6.0], 1.0),
             Segment::new([0.0, 7.0], [1.0, 7.0], 1.0),
         ];
-        let want = [Facing::PlusX, Facing::MinusX, Facing::MinusY, Facing::PlusY, Facing::Any, Facing::Any];
-        for (w, f) in walls.iter().zip(want) {
+        // facing +x, -x, -y, +y, up and to the left, either way
+        let want = [0, 4, 6, 2, 7, SECTORS];
+        for (w, k) in walls.iter().zip(want) {
             let pc = Piece { a: w.a, b: w.b, p: w.a, q: w.b, height: 1.0, one_sided: w.one_sided };
-            assert_eq!(Facing::of(&pc), f, "{w:?}");
-            let mid = [(w.a[0] + w.b[0]) / 2.0, (w.a[1] + w.b[1]) / 2.0];
-            let seen = |d: [Real; 2]| w.faces([mid[0] + d[0], mid[1] + d[1]]);
-            match f {
-                Facing::PlusX => assert!(seen([0.1, 0.0]) && !seen([-0.1, 0.0]) && !seen([0.0, 0.5])),
-                Facing::MinusX => assert!(seen([-0.1, 0.0]) && !seen([0.1, 0.0])),
-                Facing::PlusY => assert!(seen([0.0, 0.1]) && !seen([0.0, -0.1])),
-                Facing::MinusY => assert!(seen([0.0, -0.1]) && !seen([0.0, 0.1])),
-                Facing::Any => {}
+            assert_eq!(facing_class(&pc), k, "{w:?}");
+            if k < SECTORS {
+                // seen from the sector's own direction, not from the opposite one
+                let mid = [(w.a[0] + w.b[0]) / 2.0, (w.a[1] + w.b[1]) / 2.0];
+                let (s, c) = (k as Real * std::f64::consts::FRAC_PI_4).sin_cos();
+                assert!(w.faces([mid[0] + 0.1 * c, mid[1] + 0.1 * s]) && !w.faces([mid[0] - 0.1 * c, mid[1] - 0.1 * s]), "{w:?}");
             }
         }
         // sorted by class within each group, with the class ends
         let idx = SegmentIndex::new(walls, 20.0).unwrap();
         let (pieces, _, groups, _) = idx.bucket_pieces(0, 0);
-        assert_eq!(groups[0], Group { bx: [0.0, 0.0, 2.0, 7.0], start: 0, ends: [1, 2, 3, 4, 6] });
-        assert!(groups[1..].iter().all(|g| g.start == 6 && g.ends == [6; 5] && g.bx[0] > g.bx[2]));
-        assert!(pieces.windows(2).all(|w| Facing::of(&w[0]) as u8 <= Facing::of(&w[1]) as u8));
+        assert_eq!((groups[0].bx, groups[0].start, groups[0].ends), ([0.0, 0.0, 2.0, 7.0], 0, [1, 1, 2, 2, 3, 3, 4, 5, 6]));
+        assert!(groups[1..].iter().all(|g| g.start == 6 && g.ends == [6; CLASSES] && g.bx[0] > g.bx[2]));
+        assert!(pieces.windows(2).all(|w| facing_class(&w[0]) <= facing_class(&w[1])));
+    }
+
+    /// A class's `behind` test never skips a wall the point sees: walls at every angle, many
+    /// to a group, points all around and on the walls' lines.
+    #[test]
+    fn behind_a_class_means_behind_each_of_its_walls() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut walls = Vec::new();
+        for _ in 0..400 {
+            let a = [rng.random_range(0.0..4.0), rng.random_range(0.0..4.0)];
+            let (s, c) = rng.random_range(-3.2..3.2f64).sin_cos();
+            let l = rng.random_range(0.05..1.0);
+            walls.push(Segment::one_sided(a, [a[0] + l * c, a[1] + l * s], 1.0));
+        }
+        // and walls at exact multiples of 45° and on the sectors' edges (22.5°)
+        for k in 0..16 {
+            let (s, c) = (k as Real * std::f64::consts::PI / 8.0).sin_cos();
+            walls.push(Segment::one_sided([1.0 + 0.1 * k as Real, 2.0], [1.0 + 0.1 * k as Real + c, 2.0 + s], 1.0));
+        }
+        let idx = SegmentIndex::new(walls, 4.0).unwrap();
+        let (pieces, _, groups, _) = idx.bucket_pieces(0, 0);
+        let (mut skipped, mut tested) = (0, 0);
+        for trial in 0..4000 {
+            let p = if trial % 4 == 0 {
+                // on a wall's line
+                let w = &pieces[rng.random_range(0..pieces.len())];
+                let t = rng.random_range(-3.0..3.0);
+                [w.a[0] + t * (w.b[0] - w.a[0]), w.a[1] + t * (w.b[1] - w.a[1])]
+            } else {
+                [rng.random_range(-6.0..10.0), rng.random_range(-6.0..10.0)]
+            };
+            for g in groups {
+                let mut from = g.start as usize;
+                for k in 0..SECTORS {
+                    let to = g.ends[k] as usize;
+                    if from < to {
+                        tested += 1;
+                        if g.behind(k, p[0], p[1]) {
+                            skipped += 1;
+                            for pc in &pieces[from..to] {
+                                let seg = Segment::one_sided(pc.a, pc.b, 1.0);
+                                assert!(!seg.faces(p), "{p:?} sees {pc:?}, class {k}");
+                            }
+                        }
+                    }
+                    from = to;
+                }
+            }
+        }
+        // and it does skip: most classes face away from a good share of points
+        assert!(skipped * 4 > tested, "{skipped} of {tested}");
     }
 
     fn check_pieces(walls: &[Segment], cell: Real) {
@@ -466,16 +543,16 @@ mod tests {
                 for (g, grp) in groups.iter().enumerate() {
                     assert_eq!(grp.start as usize, from);
                     assert!(grp.ends.windows(2).all(|e| e[0] <= e[1]));
-                    for (k, pc) in pieces.iter().enumerate().take(grp.ends[4] as usize).skip(from) {
+                    for (k, pc) in pieces.iter().enumerate().take(grp.ends[CLASSES - 1] as usize).skip(from) {
                         let c = grp.ends.iter().position(|&e| k < e as usize).unwrap();
-                        assert_eq!(Facing::of(pc) as usize, c);
+                        assert_eq!(facing_class(pc), c);
                         let sub = cell / SUB as Real;
                         let m = [(pc.p[0] + pc.q[0]) / 2.0, (pc.p[1] + pc.q[1]) / 2.0];
                         let (sx, sy) = (idx.origin()[0] + i as Real * cell + (g % SUB) as Real * sub, idx.origin()[1] + j as Real * cell + (g / SUB) as Real * sub);
                         assert!(m[0] >= sx - 1e-6 && m[0] <= sx + sub + 1e-6 && m[1] >= sy - 1e-6 && m[1] <= sy + sub + 1e-6, "{m:?} off group {g} of ({i}, {j})");
                         assert!(pc.p[0].min(pc.q[0]) >= grp.bx[0] && pc.p[0].max(pc.q[0]) <= grp.bx[2] && pc.p[1].min(pc.q[1]) >= grp.bx[1] && pc.p[1].max(pc.q[1]) <= grp.bx[3]);
                     }
-                    from = grp.ends[4] as usize;
+                    from = grp.ends[CLASSES - 1] as usize;
                 }
                 assert_eq!(from, pieces.len());
             }
