@@ -72,6 +72,8 @@ pub struct IndexedScanStats {
     /// Pieces facing the sensor and in range but skipped as occluded (every beam of theirs
     /// already hits something nearer).
     pub walls_occluded: usize,
+    /// Beams computed by the sweeps of the pieces swept (a beam once per piece through it).
+    pub beams_swept: usize,
 }
 
 /// Pieces a group needs for the LIDAR to test whether its box is hidden before reading them.
@@ -279,6 +281,7 @@ impl Lidar {
                 continue;
             }
             stats.walls_swept += 1;
+            stats.beams_swept += count;
             let (a, b) = (f.point(pc.a), f.point(pc.b));
             if planar {
                 self.sweep_flat(a, b, j0, count, ranges);
