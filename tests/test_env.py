@@ -159,6 +159,19 @@ def test_bad_actions_and_arguments_raise_named_errors():
         gym.make("shieldnav/MapInspection-v0", map_path="/nonexistent/map.yaml")
 
 
+def test_map_walls_are_simplified_by_default_and_on_request():
+    walls = {}
+    for tol in (None, 0, 2.0):
+        env = gym.make("shieldnav/MapInspection-v0", **({} if tol is None else {"simplify": tol}))
+        env.reset(seed=0)
+        walls[tol] = len(env.unwrapped._episode.render_data()["walls"])
+    assert walls[2.0] < walls[None] < 0.5 * walls[0]
+    assert shieldnav.ENV_DEFAULTS["simplify"] == 1.0
+    for bad in (-1, float("nan"), "x"):
+        with pytest.raises(InvalidArgumentError, match="simplify"):
+            gym.make("shieldnav/MapInspection-v0", simplify=bad)
+
+
 def test_defaults_are_the_papers():
     d = shieldnav.ENV_DEFAULTS
     assert d["semi_axes"] == [0.9, 0.45] and d["gamma"] == 0.9 and d["kappa"] == 8.0 and d["alpha"] == 2.0
