@@ -15,7 +15,7 @@ use rand::Rng;
 use super::lidar::{seg_origin_distance, Lidar, Scan};
 use crate::error::Result;
 use crate::math::Real;
-use crate::world::index::{Piece, PieceLanes, CLASSES, LANES, SECTORS};
+use crate::world::index::{is_behind, Piece, PieceLanes, CLASSES, LANES, SECTORS};
 use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
@@ -408,11 +408,12 @@ impl Lidar {
                 }
                 // the pieces that face the sensor, are tall enough and in range, without
                 // branches; a class of one-sided pieces that all face away is not read at all
-                // (see `Group::behind`): per run of consecutive classes not skipped, the beams
+                // (see `world::index::is_behind`): per run of consecutive classes not skipped, the beams
                 // of all its pieces at once (independent, in lanes of four), then their sweeps
                 let (mut run, mut from) = (grp.start as usize, grp.start as usize);
+                let behind = index.behind(grp);
                 for (k, &to) in grp.ends.iter().enumerate() {
-                    if k < SECTORS && grp.behind(k, sp.x, sp.y) {
+                    if k < SECTORS && is_behind(&behind[k], sp.x, sp.y) {
                         self.sweep_run(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
                         run = to as usize;
                     }

@@ -1,6 +1,6 @@
 //! A uniform bucket grid over wall segments, to fetch the walls near a point on big maps.
 
-use super::geometry::{Point2, Segment};
+use super::geometry::{cross2, Point2, Segment};
 use crate::error::{Error, Result};
 use crate::math::Real;
 
@@ -33,6 +33,9 @@ pub struct SegmentIndex {
     content: Vec<[Real; 4]>,
     /// Per bucket: its [`Group`]s, `GROUPS` of them, in sub-cell order `sx + SUB * sy`.
     groups: Vec<Group>,
+    /// Per non-empty group: per sector class, whether a point is behind all its walls (see
+    /// [`behind`]).
+    behinds: Vec<[[Real; 6]; SECTORS]>,
     /// Per sub-cell `(sx, sy)` of a bucket nearest the sensor: the groups nearest first.
     orders: [[u8; GROUPS]; GROUPS],
     stamp: Vec<u32>,
@@ -100,6 +103,8 @@ impl SegmentIndex {
         let mut pieces = Vec::with_capacity(ids.len());
         let mut content = Vec::with_capacity(nx * ny);
         let mut groups = Vec::with_capacity(nx * ny * GROUPS);
+        let mut behinds = Vec::new();
+        let mut keyed: Vec<((usize, usize), Piece)> = Vec::new();
         // a wall on a bucket's edge may lie a rounding error outside the computed edge
         let eps = 1e-9 * (1.0 + lo[0].abs().max(lo[1].abs()) + nx.max(ny) as Real * cell);
         for b in 0..nx * ny {
@@ -118,20 +123,41 @@ impl SegmentIndex {
             // grouped by the sub-cell of their middle, then sorted by class
             let start = *piece_starts.last().unwrap() as usize;
             let mine = &mut pieces[start..];
+            if mine.is_empty() {
+                let empty = Group { bx, start: 0, ends: [0; CLASSES], behind: u32::MAX };
+                groups.extend(std::iter::repeat_n(empty, GROUPS));
+                continue;
+            }
             let sub = |pc: &Piece| {
                 let f = |v: Real, o: Real| (((v - o) / cell * SUB as Real).floor().max(0.0) as usize).min(SUB - 1);
                 f((pc.p[0] + pc.q[0]) / 2.0, x0) + SUB * f((pc.p[1] + pc.q[1]) / 2.0, y0)
             };
-            mine.sort_by_key(|pc| (sub(pc), facing_class(pc)));
+            keyed.clear();
+            keyed.extend(mine.iter().map(|pc| ((sub(pc), facing_class(pc)), *pc)));
+            keyed.sort_by_key(|(key, _)| *key);
+            for (slot, (_, pc)) in mine.iter_mut().zip(&keyed) {
+                *slot = *pc;
+            }
             let mut from = 0;
             for g in 0..GROUPS {
-                let to = from + mine[from..].partition_point(|pc| sub(pc) <= g);
-                let of = &mine[from..to];
-                let mut ends = [0u32; CLASSES];
+                // (sorted by group, then class: each class's pieces follow the last's)
+                let (mut ends, mut to) = ([0u32; CLASSES], from);
                 for (c, end) in ends.iter_mut().enumerate() {
-                    *end = (from + of.partition_point(|pc| facing_class(pc) <= c)) as u32;
+                    while to < keyed.len() && keyed[to].0 == (g, c) {
+                        to += 1;
+                    }
+                    *end = to as u32;
                 }
-                let behind = std::array::from_fn(|k| behind(of, k));
+                let of = &mine[from..to];
+                let behind = if to > from {
+                    behinds.push(std::array::from_fn(|k| {
+                        let a = if k == 0 { from } else { ends[k - 1] as usize };
+                        behind(&mine[a..ends[k] as usize])
+                    }));
+                    (behinds.len() - 1) as u32
+                } else {
+                    u32::MAX
+                };
                 let bx = of.iter().fold([Real::INFINITY, Real::INFINITY, Real::NEG_INFINITY, Real::NEG_INFINITY], |b, pc| {
                     [b[0].min(pc.p[0]).min(pc.q[0]), b[1].min(pc.p[1]).min(pc.q[1]), b[2].max(pc.p[0]).max(pc.q[0]), b[3].max(pc.p[1]).max(pc.q[1])]
                 });
@@ -152,7 +178,7 @@ impl SegmentIndex {
             }
         }
         let n = segments.len();
-        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, piece_starts, pieces, lanes, content, groups, orders, stamp: vec![0; n], epoch: 0 })
+        Ok(Self { segments, cell, origin: lo, nx, ny, starts: counts, ids, piece_starts, pieces, lanes, content, groups, behinds, orders, stamp: vec![0; n], epoch: 0 })
     }
 
     /// All walls.
@@ -190,6 +216,12 @@ impl SegmentIndex {
         let b = j * self.nx + i;
         let start = self.piece_starts[b] as usize;
         (&self.pieces[start..self.piece_starts[b + 1] as usize], self.content[b], &self.groups[b * GROUPS..(b + 1) * GROUPS], start)
+    }
+
+    /// The behind tests of the classes of the group `grp` (not empty): see [`is_behind`].
+    #[inline(always)]
+    pub(crate) fn behind(&self, grp: &Group) -> &[[Real; 6]; SECTORS] {
+        &self.behinds[grp.behind as usize]
     }
 
     /// Every bucket's pieces, bucket after bucket, as lanes.
@@ -245,23 +277,14 @@ pub(crate) const GROUPS: usize = SUB * SUB;
 /// The pieces of a bucket whose middles lie in one of its sub-cells:
 /// `pieces[start..ends[CLASSES - 1]]` of the bucket, sorted by [`facing_class`] (class `c`
 /// ends at `ends[c]`), the box `[x0, y0, x1, y1]` holding them (empty, `x0 > x1`, if there
-/// are none), and per sector class the test of whether a point is behind all its walls (see
-/// [`behind`]).
+/// are none), and (if it is not empty) where its classes' tests of whether a point is behind
+/// all their walls are kept (see [`SegmentIndex::behind`], [`is_behind`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Group {
     pub bx: [Real; 4],
     pub start: u32,
     pub ends: [u32; CLASSES],
-    pub behind: [[Real; 6]; SECTORS],
-}
-
-impl Group {
-    /// Whether the point `(x, y)` sees none of the walls of sector class `k`.
-    #[inline(always)]
-    pub(crate) fn behind(&self, k: usize, x: Real, y: Real) -> bool {
-        let b = &self.behind[k];
-        (x * b[0] + y * b[1] <= b[2]) & (x * b[3] + y * b[4] <= b[5])
-    }
+    pub behind: u32,
 }
 
 /// A wall's part inside one bucket, for the LIDAR: the whole wall `a b` (hits are computed on
@@ -333,34 +356,44 @@ pub(crate) fn facing_class(pc: &Piece) -> usize {
     ((-dx).atan2(dy) / std::f64::consts::FRAC_PI_4).round().rem_euclid(SECTORS as Real) as usize
 }
 
-/// For the pieces `of`, all of sector class `k`: their two extreme outward normals `n1`, `n2`
-/// (unit; every other normal lies between them, within the sector) and, less a margin, the
-/// least `m1`, `m2` of `a · n1`, `a · n2` over their walls' starts `a`, as
-/// `[n1x, n1y, m1, n2x, n2y, m2]`. A point `s` with `s · n1 <= m1` and `s · n2 <= m2` sees none
-/// of them: each normal `n` is `λ1 n1 + λ2 n2` with `λ1, λ2 >= 0`, so `(s - a) · n < 0`.
-/// An empty class gets `m = -∞`, which no point passes.
-fn behind(of: &[Piece], k: usize) -> [Real; 6] {
-    let centre = k as Real * std::f64::consts::FRAC_PI_4;
+/// For the pieces `of`, all of one sector class: their two extreme outward normals `n1`, `n2`
+/// (unit, clockwise-most and counter-clockwise-most; every other normal lies between them,
+/// within the sector) and, less a margin, the least `m1`, `m2` of `a · n1`, `a · n2` over
+/// their walls' starts `a`, as `[n1x, n1y, m1, n2x, n2y, m2]`. A point `s` with `s · n1 <= m1`
+/// and `s · n2 <= m2` sees none of them: each normal `n` is `λ1 n1 + λ2 n2` with
+/// `λ1, λ2 >= 0`, so `(s - a) · n < 0`. No pieces give `m = -∞`, which no point passes.
+fn behind(of: &[Piece]) -> [Real; 6] {
     let normal = |pc: &Piece| {
         let (dx, dy) = (pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]);
         let l = dx.hypot(dy);
         [dy / l, -dx / l]
     };
-    let offset = |pc: &Piece| {
-        let n = normal(pc);
-        let d = n[1].atan2(n[0]) - centre;
-        (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
-    };
-    let mine = || of.iter().filter(|pc| facing_class(pc) == k);
-    let (Some(lo), Some(hi)) = (mine().min_by(|x, y| offset(x).total_cmp(&offset(y))), mine().max_by(|x, y| offset(x).total_cmp(&offset(y)))) else {
+    let Some(first) = of.first() else {
         return [0.0, 0.0, Real::NEG_INFINITY, 0.0, 0.0, Real::NEG_INFINITY];
     };
-    let (n1, n2) = (normal(lo), normal(hi));
+    // within a sector (under half a turn) "clockwise of" is an order
+    let (mut n1, mut n2) = (normal(first), normal(first));
+    for pc in &of[1..] {
+        let n = normal(pc);
+        if cross2(n, n1) > 0.0 {
+            n1 = n;
+        }
+        if cross2(n2, n) > 0.0 {
+            n2 = n;
+        }
+    }
     let least = |n: [Real; 2]| {
-        let m = mine().map(|pc| pc.a[0] * n[0] + pc.a[1] * n[1]).fold(Real::INFINITY, Real::min);
+        let m = of.iter().map(|pc| pc.a[0] * n[0] + pc.a[1] * n[1]).fold(Real::INFINITY, Real::min);
         m - 1e-9 * (1.0 + m.abs())
     };
     [n1[0], n1[1], least(n1), n2[0], n2[1], least(n2)]
+}
+
+/// Whether the point `(x, y)` sees none of the walls of a sector class whose test (see
+/// [`behind`]) is `b`.
+#[inline(always)]
+pub(crate) fn is_behind(b: &[Real; 6], x: Real, y: Real) -> bool {
+    (x * b[0] + y * b[1] <= b[2]) & (x * b[3] + y * b[4] <= b[5])
 }
 
 /// The part of segment `a b` inside the box `lo`–`hi` (Liang–Barsky), if any; an end inside
@@ -505,7 +538,7 @@ mod tests {
                     let to = g.ends[k] as usize;
                     if from < to {
                         tested += 1;
-                        if g.behind(k, p[0], p[1]) {
+                        if is_behind(&idx.behind(g)[k], p[0], p[1]) {
                             skipped += 1;
                             for pc in &pieces[from..to] {
                                 let seg = Segment::one_sided(pc.a, pc.b, 1.0);
