@@ -108,6 +108,8 @@ def test_map_walls_are_simplified_within_the_tolerance():
     for bad in (-1.0, float("nan")):
         with pytest.raises(ValueError, match="simplify"):
             World(ros_map=yaml, simplify=bad)
+    with pytest.raises(ValueError, match="simplify.*ros_map"):
+        World(preset="constricted_passage", simplify=1.0)
 
 
 def test_points_are_ranges_in_the_body_frame():

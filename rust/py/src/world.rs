@@ -126,6 +126,9 @@ impl PyWorld {
         if sources != 1 {
             return Err(InvalidArgumentError::new_err(format!("give exactly one of preset, procedural, ros_map, scenario (got {sources})")));
         }
+        if simplify.is_some() && ros_map.is_none() {
+            return Err(InvalidArgumentError::new_err("invalid `simplify`: it applies to `ros_map` worlds only (their walls' contours)"));
+        }
         let kind = match kind {
             "office" => SiteKind::Office,
             "tunnel" => SiteKind::Tunnel,
