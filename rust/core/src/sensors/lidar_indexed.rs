@@ -78,6 +78,7 @@ pub struct IndexedScanStats {
 
 /// Pieces a group needs for the LIDAR to test whether its box is hidden before reading them.
 const GROUP_TEST_MIN: u32 = 8;
+/// Pieces a bucket needs for the LIDAR to read it group by group (fewer are read at once).
 const BUCKET_GROUPS_MIN: u32 = 32;
 
 /// Whether none of the `count` ranges from column `j0` (modulo their number, a power of two)
@@ -386,9 +387,7 @@ impl Lidar {
             if pieces.len() < BUCKET_GROUPS_MIN as usize {
                 // a small bucket: all its pieces at once, whether each faces the sensor decided
                 // piece by piece
-                self.piece_beams(lanes, start, pieces.len(), &f, &mut beams);
-                stats.walls_visited += pieces.len();
-                self.sweep_pieces(pieces, &beams, &f, &mut out.ranges, &mut stats);
+                self.sweep_run(lanes, start, pieces, 0..pieces.len(), &f, &mut beams, &mut out.ranges, &mut stats);
                 continue;
             }
             for &g in index.group_order(i as usize, j as usize, [sp.x, sp.y]) {
@@ -408,8 +407,9 @@ impl Lidar {
                 }
                 // the pieces that face the sensor, are tall enough and in range, without
                 // branches; a class of one-sided pieces that all face away is not read at all
-                // (see `world::index::is_behind`): per run of consecutive classes not skipped, the beams
-                // of all its pieces at once (independent, in lanes of four), then their sweeps
+                // (see `world::index::is_behind`): per run of consecutive classes not skipped,
+                // the beams of all its pieces at once (independent, in lanes of four), then
+                // their sweeps
                 let (mut run, mut from) = (grp.start as usize, grp.start as usize);
                 let behind = index.behind(grp);
                 for (k, &to) in grp.ends.iter().enumerate() {

@@ -361,7 +361,7 @@ pub(crate) fn facing_class(pc: &Piece) -> usize {
 /// within the sector) and, less a margin, the least `m1`, `m2` of `a · n1`, `a · n2` over
 /// their walls' starts `a`, as `[n1x, n1y, m1, n2x, n2y, m2]`. A point `s` with `s · n1 <= m1`
 /// and `s · n2 <= m2` sees none of them: each normal `n` is `λ1 n1 + λ2 n2` with
-/// `λ1, λ2 >= 0`, so `(s - a) · n < 0`. No pieces give `m = -∞`, which no point passes.
+/// `λ1, λ2 >= 0`, so `(s - a) · n < 0`. An empty class gets `m = -∞`, which no point passes.
 fn behind(of: &[Piece]) -> [Real; 6] {
     let normal = |pc: &Piece| {
         let (dx, dy) = (pc.b[0] - pc.a[0], pc.b[1] - pc.a[1]);
