@@ -582,6 +582,26 @@ pub(super) fn iceil(x: Real) -> i64 {
 /// bound of [`fast_atan2`] (tested), far below a beam step (3.1e-3 rad at 2048 columns).
 pub(super) const ANGLE_SLACK: Real = 1e-4;
 
+/// The lesser of `a` and `b` (finite), as one instruction (`f64::min` also orders NaNs).
+#[inline(always)]
+pub(super) fn min(a: Real, b: Real) -> Real {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The greater of `a` and `b` (finite), as one instruction (`f64::max` also orders NaNs).
+#[inline(always)]
+pub(super) fn max(a: Real, b: Real) -> Real {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
 /// `atan2` to about 1e-5 rad: only used to pick the beams to test, with [`ANGLE_SLACK`] of
 /// margin; the ranges themselves are exact. Written as selects, not
 /// branches, so that the two end points of a wall are computed side by side.
@@ -590,10 +610,10 @@ pub(super) fn fast_atan2(y: Real, x: Real) -> Real {
     use std::f64::consts::{FRAC_PI_2, PI};
     let (ax, ay) = (x.abs(), y.abs());
     let steep = ay > ax;
-    // (as selects, one instruction each: `min` and `max` would also order NaNs)
+    // (as selects, one instruction each: `f64::min` and `max` would also order NaNs)
     let (mn, mx) = if steep { (ax, ay) } else { (ay, ax) };
     // 0 at the origin (0 / MIN_POSITIVE)
-    let q = mn / if mx > Real::MIN_POSITIVE { mx } else { Real::MIN_POSITIVE };
+    let q = mn / max(mx, Real::MIN_POSITIVE);
     let s = q * q;
     let mut r = (((-0.013_480_470 * s + 0.057_477_314) * s - 0.121_239_071) * s + 0.195_635_925) * s - 0.332_994_597;
     r = (r * s + 0.999_995_630) * q;

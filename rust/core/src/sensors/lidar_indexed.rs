@@ -12,7 +12,7 @@
 
 use rand::Rng;
 
-use super::lidar::{seg_origin_distance, Lidar, Scan};
+use super::lidar::{max, min, seg_origin_distance, Lidar, Scan};
 use crate::error::Result;
 use crate::math::Real;
 use crate::world::index::{is_behind, Piece, PieceLanes, CLASSES, LANES, SECTORS};
@@ -107,26 +107,6 @@ fn none_beyond_sq(ranges: &[Real], j0: i64, count: usize, d2: Real) -> bool {
         i = (i + 1) & (n - 1);
     }
     true
-}
-
-/// The lesser of `a` and `b` (finite), as one instruction.
-#[inline(always)]
-fn min(a: Real, b: Real) -> Real {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-/// The greater of `a` and `b` (finite), as one instruction.
-#[inline(always)]
-fn max(a: Real, b: Real) -> Real {
-    if a > b {
-        a
-    } else {
-        b
-    }
 }
 
 /// The two corners of the box `[x0, x1] × [y0, y1]` between which it lies as seen from
