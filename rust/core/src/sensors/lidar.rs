@@ -27,6 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use super::noise::{fill_standard_normal, fill_unit_uniform};
 use super::ray_segment::ray_segment_distance;
+use super::simd::Simd;
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::world::{cross2, Pose2, Segment};
@@ -186,6 +187,8 @@ pub struct Lidar {
     normals: Vec<f32>,
     /// Scratch of the dropout draws (one uniform per beam).
     uniforms: Vec<Real>,
+    /// The vector instructions the scans run with.
+    pub(super) simd: Simd,
 }
 
 impl Lidar {
@@ -209,6 +212,7 @@ impl Lidar {
             indexed: Default::default(),
             normals: Vec::new(),
             uniforms: Vec::new(),
+            simd: Simd::detect(),
         })
     }
 
@@ -416,8 +420,8 @@ impl Lidar {
     }
 
     /// [`Lidar::sweep`] for a planar ring, without branches but for walls parallel to a beam;
-    /// more than a few beams go over contiguous runs, so that the divisions run several to an
-    /// instruction.
+    /// with AVX2, four beams at once (see [`super::simd::flat_blocks_avx2`]), else more than a
+    /// few beams go over contiguous runs, so that the divisions run several to an instruction.
     #[inline(always)]
     pub(super) fn sweep_flat(&self, a: [Real; 2], b: [Real; 2], j0: i64, count: usize, best: &mut [Real]) {
         let n = self.config.columns;
@@ -425,7 +429,17 @@ impl Lidar {
         let e = [b[0] - a[0], b[1] - a[1]];
         let ae = cross2(a, e);
         let mut parallel = false;
-        if count <= 8 {
+        #[cfg(target_arch = "x86_64")]
+        let simd = self.simd != Simd::Portable && i0 + count <= n;
+        #[cfg(not(target_arch = "x86_64"))]
+        let simd = false;
+        if simd {
+            #[cfg(target_arch = "x86_64")]
+            {
+                // SAFETY: `simd` is not `Portable` only on a CPU found to run AVX2.
+                parallel = unsafe { super::simd::flat_blocks_avx2(a, e, ae, &self.az_cos, &self.az_sin, best, i0, count) };
+            }
+        } else if count <= 8 {
             let mut i = i0;
             for _ in 0..count {
                 let (r, par) = flat_beam(a, e, ae, self.az_cos[i], self.az_sin[i], best[i]);
@@ -475,8 +489,8 @@ impl Lidar {
             fill_unit_uniform(rng, &mut self.uniforms);
         }
         #[cfg(target_arch = "x86_64")]
-        if has_avx2() {
-            // SAFETY: the CPU has AVX2 and FMA, checked just above.
+        if self.simd != Simd::Portable {
+            // SAFETY: `simd` is not `Portable` only on a CPU found to run AVX2 and FMA.
             unsafe { self.apply_draws_and_points_avx2(out) };
             return;
         }
@@ -540,13 +554,6 @@ fn flat_beam(a: [Real; 2], e: [Real; 2], ae: Real, dc: Real, ds: Real, cur: Real
     let hit = (den > 0.0) & (ae >= 0.0) & (sn >= 0.0) & (sn <= den) | (den < 0.0) & (ae <= 0.0) & (sn <= 0.0) & (sn >= den);
     let t = ae / den;
     (if hit & (t < cur) { t } else { cur }, den == 0.0)
-}
-
-/// Whether this CPU runs AVX2 and FMA (checked once, then cached by the standard library).
-#[cfg(target_arch = "x86_64")]
-#[inline]
-pub(super) fn has_avx2() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 /// Distance from the origin to the segment `a b`.
@@ -643,17 +650,21 @@ mod tests {
         assert!(worst < 2e-5, "worst {worst}");
     }
 
-    /// The AVX2 build of the indexed scan gives the portable build's ranges, bit for bit, on a
-    /// generated site and (when `../shared/maps` is beside the repository) on the most
-    /// cluttered real map.
+    /// The AVX2 and AVX-512 builds of the indexed scan give the portable build's ranges, bit
+    /// for bit, on a generated site and (when `../shared/maps` is beside the repository) on
+    /// the most cluttered real map.
     #[cfg(target_arch = "x86_64")]
     #[test]
-    fn avx2_scans_equal_portable_scans() {
+    fn vector_scans_equal_portable_scans() {
         use crate::world::generate::{generate, GeneratorConfig};
         use crate::world::{load_ros_map, RosMapOptions, SegmentIndex};
-        if !has_avx2() {
+        let best = Simd::detect();
+        if best == Simd::Portable {
             eprintln!("SKIPPED: no AVX2 on this CPU");
             return;
+        }
+        if best != Simd::Avx512 {
+            eprintln!("AVX-512 build not tested: not on this CPU");
         }
         let site = generate(4, &GeneratorConfig::default()).unwrap();
         let mut worlds = vec![("generated", site.scenario.map.segments, site.waypoints.iter().take(12).copied().collect::<Vec<_>>())];
@@ -678,16 +689,69 @@ mod tests {
                         l.begin_scan(pose, 0.0, s).unwrap();
                     }
                     let sp = l.sensor_pose(pose);
-                    l.sweep_walls(&[&walls], sp, &mut scans[0]);
-                    l.sweep_index(&index, &[], sp, &mut scans[2]);
-                    // SAFETY: AVX2 and FMA checked above.
-                    unsafe { l.sweep_index_avx2(&index, &[], sp, &mut scans[3]) };
+                    l.simd = Simd::Portable;
+                    l.sweep_index(&index, &[], sp, &mut scans[0]);
+                    l.simd = Simd::Avx2;
+                    // SAFETY: this CPU runs AVX2 and FMA (`best` is not `Portable`).
+                    unsafe { l.sweep_index_avx2(&index, &[], sp, &mut scans[1]) };
                     let bits = |s: &Scan| s.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
                     assert!(scans[0].ranges.iter().filter(|r| r.is_finite()).count() > 300 * channels);
-                    assert_eq!(bits(&scans[2]), bits(&scans[3]), "{name}: scan_indexed_into, {channels} channels, pose {k}");
+                    assert_eq!(bits(&scans[0]), bits(&scans[1]), "{name}: AVX2, {channels} channels, pose {k}");
+                    if best == Simd::Avx512 {
+                        l.simd = Simd::Avx512;
+                        // SAFETY: this CPU runs AVX-512.
+                        unsafe { l.sweep_index_avx512(&index, &[], sp, &mut scans[2]) };
+                        assert_eq!(bits(&scans[0]), bits(&scans[2]), "{name}: AVX-512, {channels} channels, pose {k}");
+                    }
                 }
             }
         }
+    }
+
+    /// The planar sweep four beams at once gives the beam-by-beam sweep's ranges, bit for bit:
+    /// walls at any angle and axis-aligned ones (beams parallel to them), near and far, over
+    /// ranges already partly filled, without and across the wrap at column 0.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn vector_planar_sweep_equals_portable_sweep() {
+        if Simd::detect() == Simd::Portable {
+            eprintln!("SKIPPED: no AVX2 on this CPU");
+            return;
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let mut l = Lidar::new(LidarConfig { range_noise_std: 0.0, ..Default::default() }).unwrap();
+        let mut parallel = 0;
+        for trial in 0..20_000 {
+            let mut a = [rng.random_range(-6.0..6.0), rng.random_range(-6.0..6.0)];
+            if trial % 8 == 0 {
+                // a horizontal wall nearly through the sensor: the beams along it are in its
+                // interval's slack
+                a[1] = rng.random_range(-1e-5..1e-5);
+            }
+            let b = match trial % 4 {
+                0 => [a[0] + rng.random_range(-3.0..3.0), a[1]],
+                1 => [a[0], a[1] + rng.random_range(-3.0..3.0)],
+                _ => [a[0] + rng.random_range(-3.0..3.0), a[1] + rng.random_range(-3.0..3.0)],
+            };
+            let cr = cross2(a, b);
+            if cr == 0.0 {
+                continue;
+            }
+            let (j0, count) = l.wall_beams(a, b, cr);
+            parallel += (0..count).any(|k| {
+                let i = (j0 + k as i64).rem_euclid(1024) as usize;
+                l.az_cos[i] * (b[1] - a[1]) - l.az_sin[i] * (b[0] - a[0]) == 0.0
+            }) as usize;
+            let start: Vec<Real> = (0..1024).map(|_| if rng.random_bool(0.3) { Real::INFINITY } else { rng.random_range(0.1..8.0) }).collect();
+            let (mut portable, mut vector) = (start.clone(), start);
+            l.simd = Simd::Portable;
+            l.sweep_flat(a, b, j0, count, &mut portable);
+            l.simd = Simd::Avx2;
+            l.sweep_flat(a, b, j0, count, &mut vector);
+            let bits = |v: &[Real]| v.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&portable), bits(&vector), "wall {a:?} {b:?}, beams {j0} + {count}");
+        }
+        assert!(parallel > 100, "{parallel} walls with a parallel beam");
     }
 
     #[test]

@@ -13,6 +13,7 @@
 use rand::Rng;
 
 use super::lidar::{max, min, seg_origin_distance, Lidar, Scan};
+use super::simd::Simd;
 use crate::error::Result;
 use crate::math::Real;
 use crate::world::index::{is_behind, Piece, PieceLanes, CLASSES, LANES, SECTORS};
@@ -281,14 +282,15 @@ impl Lidar {
     /// Ranges are identical to [`Lidar::scan_into`] over the same walls.
     pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
         let sp = self.begin_scan(body, stamp, out)?;
-        #[cfg(target_arch = "x86_64")]
-        if super::lidar::has_avx2() {
-            // SAFETY: the CPU has AVX2 and FMA, checked just above.
-            unsafe { self.sweep_index_avx2(index, extra, sp, out) };
-            self.finish(rng, out);
-            return Ok(());
+        match self.simd {
+            // SAFETY: `simd` is found from the CPU: it runs these instructions.
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx512 => unsafe { self.sweep_index_avx512(index, extra, sp, out) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx2 => unsafe { self.sweep_index_avx2(index, extra, sp, out) },
+            _ => self.sweep_index(index, extra, sp, out),
         }
-        self.sweep_index(index, extra, sp, out);
         self.finish(rng, out);
         Ok(())
     }
@@ -298,6 +300,14 @@ impl Lidar {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn sweep_index_avx2(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
+        self.sweep_index(index, extra, sp, out);
+    }
+
+    /// [`Lidar::sweep_index`] built for AVX-512 (same ranges): twice the vector registers,
+    /// and mask registers, for the many values of [`Lidar::piece_beams`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq,avx512bw")]
+    pub(super) fn sweep_index_avx512(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         self.sweep_index(index, extra, sp, out);
     }
 

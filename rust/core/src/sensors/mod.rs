@@ -8,6 +8,7 @@ mod lidar_indexed;
 pub mod noise;
 pub mod odometry;
 mod ray_segment;
+mod simd;
 
 pub use lidar::{Lidar, LidarConfig, LidarMount, Scan};
 pub use lidar_indexed::IndexedScanStats;
