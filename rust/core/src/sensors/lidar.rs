@@ -488,13 +488,15 @@ impl Lidar {
             self.uniforms.resize(n, 0.0);
             fill_unit_uniform(rng, &mut self.uniforms);
         }
-        #[cfg(target_arch = "x86_64")]
-        if self.simd != Simd::Portable {
-            // SAFETY: `simd` is not `Portable` only on a CPU found to run AVX2 and FMA.
-            unsafe { self.apply_draws_and_points_avx2(out) };
-            return;
+        match self.simd {
+            // SAFETY: `simd` is found from the CPU: it runs these instructions.
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx512 => unsafe { self.apply_draws_and_points_avx512(out) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx2 => unsafe { self.apply_draws_and_points_avx2(out) },
+            _ => self.apply_draws_and_points(out),
         }
-        self.apply_draws_and_points(out);
     }
 
     /// [`Lidar::apply_draws_and_points`] built for AVX2 and FMA (same numbers: no fused
@@ -502,6 +504,13 @@ impl Lidar {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn apply_draws_and_points_avx2(&self, out: &mut Scan) {
+        self.apply_draws_and_points(out);
+    }
+
+    /// [`Lidar::apply_draws_and_points`] built for AVX-512 (same numbers).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq,avx512bw")]
+    fn apply_draws_and_points_avx512(&self, out: &mut Scan) {
         self.apply_draws_and_points(out);
     }
 
@@ -702,6 +711,20 @@ mod tests {
                         // SAFETY: this CPU runs AVX-512.
                         unsafe { l.sweep_index_avx512(&index, &[], sp, &mut scans[2]) };
                         assert_eq!(bits(&scans[0]), bits(&scans[2]), "{name}: AVX-512, {channels} channels, pose {k}");
+                    }
+                    // and the limits, noise, dropout and points alike
+                    let mut noisy = Lidar::new(LidarConfig { channels, range_noise_std: 0.05, dropout: 0.1, max_range: 8.0, ..Default::default() }).unwrap();
+                    let mut done: Vec<Scan> = Vec::new();
+                    for simd in [Simd::Portable, Simd::Avx2, Simd::Avx512].into_iter().filter(|&s| s != Simd::Avx512 || best == Simd::Avx512) {
+                        noisy.simd = simd;
+                        let mut s = scans[0].clone();
+                        noisy.finish(&mut ChaCha8Rng::seed_from_u64(k as u64), &mut s);
+                        done.push(s);
+                    }
+                    let point_bits = |s: &Scan| s.points.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+                    assert!(done[0].ranges.iter().any(|r| r.is_finite()) && done[0].ranges.iter().any(|r| r.is_infinite()));
+                    for s in &done[1..] {
+                        assert_eq!((bits(&done[0]), point_bits(&done[0])), (bits(s), point_bits(s)), "{name}: finished, {channels} channels, pose {k}");
                     }
                 }
             }
