@@ -631,8 +631,8 @@ pub(super) fn fast_atan2(y: Real, x: Real) -> Real {
     // 0 at the origin (0 / MIN_POSITIVE)
     let q = mn / max(mx, Real::MIN_POSITIVE);
     let s = q * q;
-    let mut r = (((-0.013_480_470 * s + 0.057_477_314) * s - 0.121_239_071) * s + 0.195_635_925) * s - 0.332_994_597;
-    r = (r * s + 0.999_995_630) * q;
+    let mut r = ((0.020_845_09 * s - 0.085_156_31) * s + 0.180_159_28) * s - 0.330_304_79;
+    r = (r * s + 0.999_866_33) * q;
     r = if steep { FRAC_PI_2 - r } else { r };
     r = if x < 0.0 { PI - r } else { r };
     if y < 0.0 {
