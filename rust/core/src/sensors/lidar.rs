@@ -173,6 +173,8 @@ pub struct Lidar {
     pub(super) config: LidarConfig,
     az_cos: Vec<Real>,
     az_sin: Vec<Real>,
+    /// Columns per radian.
+    inv_step: Real,
     el_tan: Vec<Real>,
     el_sec: Vec<Real>,
     el_cos: Vec<Real>,
@@ -203,6 +205,7 @@ impl Lidar {
             config,
             az_cos,
             az_sin,
+            inv_step: n as Real / std::f64::consts::TAU,
             el_tan: elev.iter().map(|e| e.tan()).collect(),
             el_sec: elev.iter().map(|e| 1.0 / e.cos()).collect(),
             el_cos: elev.iter().map(|e| e.cos()).collect(),
@@ -347,7 +350,7 @@ impl Lidar {
     pub(super) fn wall_beams(&self, a: [Real; 2], b: [Real; 2], cr: Real) -> (i64, usize) {
         use std::f64::consts::TAU;
         let n = self.config.columns;
-        let inv_step = n as Real / TAU;
+        let inv_step = self.inv_step;
         let fa = fast_atan2(a[1], a[0]);
         let fb = fast_atan2(b[1], b[0]);
         // counter-clockwise from the start to the end
