@@ -13,6 +13,7 @@ pub mod error;
 pub mod math;
 pub mod planner;
 pub mod shield;
+pub mod simd;
 pub mod world;
 pub mod sensors;
 pub mod robot;

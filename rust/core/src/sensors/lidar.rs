@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use super::noise::{fill_standard_normal, fill_unit_uniform};
 use super::ray_segment::ray_segment_distance;
-use super::simd::Simd;
+use crate::simd::SimdLevel;
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::world::{cross2, Pose2, Segment};
@@ -190,7 +190,7 @@ pub struct Lidar {
     /// Scratch of the dropout draws (one uniform per beam).
     uniforms: Vec<Real>,
     /// The vector instructions the scans run with.
-    pub(super) simd: Simd,
+    pub(super) simd: SimdLevel,
 }
 
 impl Lidar {
@@ -215,7 +215,7 @@ impl Lidar {
             indexed: Default::default(),
             normals: Vec::new(),
             uniforms: Vec::new(),
-            simd: Simd::detect(),
+            simd: SimdLevel::detect(),
         })
     }
 
@@ -433,7 +433,7 @@ impl Lidar {
         let ae = cross2(a, e);
         let mut parallel = false;
         #[cfg(target_arch = "x86_64")]
-        let simd = self.simd != Simd::Portable && i0 + count <= n;
+        let simd = self.simd != SimdLevel::Portable && i0 + count <= n;
         #[cfg(not(target_arch = "x86_64"))]
         let simd = false;
         if simd {
@@ -494,10 +494,10 @@ impl Lidar {
         match self.simd {
             // SAFETY: `simd` is found from the CPU: it runs these instructions.
             #[cfg(target_arch = "x86_64")]
-            Simd::Avx512 => unsafe { self.apply_draws_and_points_avx512(out) },
+            SimdLevel::Avx512 => unsafe { self.apply_draws_and_points_avx512(out) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
-            Simd::Avx2 => unsafe { self.apply_draws_and_points_avx2(out) },
+            SimdLevel::Avx2 => unsafe { self.apply_draws_and_points_avx2(out) },
             _ => self.apply_draws_and_points(out),
         }
     }
@@ -512,7 +512,7 @@ impl Lidar {
 
     /// [`Lidar::apply_draws_and_points`] built for AVX-512 (same numbers).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq,avx512bw")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq")]
     fn apply_draws_and_points_avx512(&self, out: &mut Scan) {
         self.apply_draws_and_points(out);
     }
@@ -670,12 +670,12 @@ mod tests {
     fn vector_scans_equal_portable_scans() {
         use crate::world::generate::{generate, GeneratorConfig};
         use crate::world::{load_ros_map, RosMapOptions, SegmentIndex};
-        let best = Simd::detect();
-        if best == Simd::Portable {
+        let best = SimdLevel::detect();
+        if best == SimdLevel::Portable {
             eprintln!("SKIPPED: no AVX2 on this CPU");
             return;
         }
-        if best != Simd::Avx512 {
+        if best != SimdLevel::Avx512 {
             eprintln!("AVX-512 build not tested: not on this CPU");
         }
         let site = generate(4, &GeneratorConfig::default()).unwrap();
@@ -701,16 +701,16 @@ mod tests {
                         l.begin_scan(pose, 0.0, s).unwrap();
                     }
                     let sp = l.sensor_pose(pose);
-                    l.simd = Simd::Portable;
+                    l.simd = SimdLevel::Portable;
                     l.sweep_index(&index, &[], sp, &mut scans[0]);
-                    l.simd = Simd::Avx2;
+                    l.simd = SimdLevel::Avx2;
                     // SAFETY: this CPU runs AVX2 and FMA (`best` is not `Portable`).
                     unsafe { l.sweep_index_avx2(&index, &[], sp, &mut scans[1]) };
                     let bits = |s: &Scan| s.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
                     assert!(scans[0].ranges.iter().filter(|r| r.is_finite()).count() > 300 * channels);
                     assert_eq!(bits(&scans[0]), bits(&scans[1]), "{name}: AVX2, {channels} channels, pose {k}");
-                    if best == Simd::Avx512 {
-                        l.simd = Simd::Avx512;
+                    if best == SimdLevel::Avx512 {
+                        l.simd = SimdLevel::Avx512;
                         // SAFETY: this CPU runs AVX-512.
                         unsafe { l.sweep_index_avx512(&index, &[], sp, &mut scans[2]) };
                         assert_eq!(bits(&scans[0]), bits(&scans[2]), "{name}: AVX-512, {channels} channels, pose {k}");
@@ -718,7 +718,7 @@ mod tests {
                     // and the limits, noise, dropout and points alike
                     let mut noisy = Lidar::new(LidarConfig { channels, range_noise_std: 0.05, dropout: 0.1, max_range: 8.0, ..Default::default() }).unwrap();
                     let mut done: Vec<Scan> = Vec::new();
-                    for simd in [Simd::Portable, Simd::Avx2, Simd::Avx512].into_iter().filter(|&s| s != Simd::Avx512 || best == Simd::Avx512) {
+                    for simd in [SimdLevel::Portable, SimdLevel::Avx2, SimdLevel::Avx512].into_iter().filter(|&s| s != SimdLevel::Avx512 || best == SimdLevel::Avx512) {
                         noisy.simd = simd;
                         let mut s = scans[0].clone();
                         noisy.finish(&mut ChaCha8Rng::seed_from_u64(k as u64), &mut s);
@@ -740,7 +740,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn vector_planar_sweep_equals_portable_sweep() {
-        if Simd::detect() == Simd::Portable {
+        if SimdLevel::detect() == SimdLevel::Portable {
             eprintln!("SKIPPED: no AVX2 on this CPU");
             return;
         }
@@ -770,9 +770,9 @@ mod tests {
             }) as usize;
             let start: Vec<Real> = (0..1024).map(|_| if rng.random_bool(0.3) { Real::INFINITY } else { rng.random_range(0.1..8.0) }).collect();
             let (mut portable, mut vector) = (start.clone(), start);
-            l.simd = Simd::Portable;
+            l.simd = SimdLevel::Portable;
             l.sweep_flat(a, b, j0, count, &mut portable);
-            l.simd = Simd::Avx2;
+            l.simd = SimdLevel::Avx2;
             l.sweep_flat(a, b, j0, count, &mut vector);
             let bits = |v: &[Real]| v.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&portable), bits(&vector), "wall {a:?} {b:?}, beams {j0} + {count}");

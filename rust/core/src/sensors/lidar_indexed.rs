@@ -13,7 +13,7 @@
 use rand::Rng;
 
 use super::lidar::{max, min, seg_origin_distance, Lidar, Scan};
-use super::simd::Simd;
+use crate::simd::SimdLevel;
 use crate::error::Result;
 use crate::math::Real;
 use crate::world::index::{is_behind, Piece, PieceLanes, CLASSES, LANES, SECTORS};
@@ -285,10 +285,10 @@ impl Lidar {
         match self.simd {
             // SAFETY: `simd` is found from the CPU: it runs these instructions.
             #[cfg(target_arch = "x86_64")]
-            Simd::Avx512 => unsafe { self.sweep_index_avx512(index, extra, sp, out) },
+            SimdLevel::Avx512 => unsafe { self.sweep_index_avx512(index, extra, sp, out) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
-            Simd::Avx2 => unsafe { self.sweep_index_avx2(index, extra, sp, out) },
+            SimdLevel::Avx2 => unsafe { self.sweep_index_avx2(index, extra, sp, out) },
             _ => self.sweep_index(index, extra, sp, out),
         }
         self.finish(rng, out);
@@ -306,7 +306,7 @@ impl Lidar {
     /// [`Lidar::sweep_index`] built for AVX-512 (same ranges): twice the vector registers,
     /// and mask registers, for the many values of [`Lidar::piece_beams`].
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq,avx512bw")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq")]
     pub(super) fn sweep_index_avx512(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         self.sweep_index(index, extra, sp, out);
     }

@@ -11,6 +11,7 @@
 use rand::Rng;
 
 use crate::math::Real;
+use crate::simd::SimdLevel;
 
 /// `2⁻⁵³`.
 const EPS53: Real = 1.0 / (1u64 << 53) as Real;
@@ -125,19 +126,15 @@ fn fill_bits<R: Rng + ?Sized, T: Copy>(rng: &mut R, out: &mut [T]) {
 /// same values as `out.len()` calls of [`standard_normal`]), in SIMD lanes.
 pub fn fill_standard_normal<R: Rng + ?Sized>(rng: &mut R, out: &mut [f32]) {
     fill_bits(rng, out);
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::is_x86_feature_detected as has;
-        if has!("avx512f") && has!("avx512dq") && has!("avx512vl") && has!("avx2") && has!("fma") {
-            // SAFETY: the CPU has every feature the build enables, checked just above.
-            return unsafe { normals_in_place_avx512(out) };
-        }
-        if has!("avx2") && has!("fma") {
-            // SAFETY: as above.
-            return unsafe { normals_in_place_avx2(out) };
-        }
+    match SimdLevel::detect() {
+        // SAFETY: the CPU has every feature the build enables (that is what `detect` finds).
+        #[cfg(target_arch = "x86_64")]
+        SimdLevel::Avx512 => unsafe { normals_in_place_avx512(out) },
+        // SAFETY: as above.
+        #[cfg(target_arch = "x86_64")]
+        SimdLevel::Avx2 => unsafe { normals_in_place_avx2(out) },
+        _ => normals_in_place(out),
     }
-    normals_in_place(out);
 }
 
 /// Fills `out` with uniforms in `[0, 1)`, the `k`-th from the `k`-th `u64` of `rng`
@@ -292,13 +289,12 @@ mod tests {
         normals_in_place(&mut portable);
         #[cfg(target_arch = "x86_64")]
         {
-            use std::arch::is_x86_feature_detected as has;
-            if has!("avx2") && has!("fma") {
+            if SimdLevel::Avx2.is_supported() {
                 let mut v = raw.clone();
                 unsafe { normals_in_place_avx2(&mut v) };
                 assert!(v.iter().zip(&portable).all(|(x, y)| x.to_bits() == y.to_bits()), "AVX2");
             }
-            if has!("avx512f") && has!("avx512dq") && has!("avx512vl") && has!("avx2") && has!("fma") {
+            if SimdLevel::Avx512.is_supported() {
                 let mut v = raw.clone();
                 unsafe { normals_in_place_avx512(&mut v) };
                 assert!(v.iter().zip(&portable).all(|(x, y)| x.to_bits() == y.to_bits()), "AVX-512");

@@ -1,37 +1,8 @@
-//! The vector instructions the LIDAR's scans are built for (found once per [`super::Lidar`]),
-//! and the one kernel written with them by hand: a planar wall's sweep over aligned blocks of
-//! four beams.
+//! The LIDAR's one kernel written with vector instructions by hand: a planar wall's sweep
+//! over aligned blocks of four beams (the rest of its AVX2 and AVX-512 builds is the portable
+//! code, vectorised by the compiler; see [`crate::simd::SimdLevel`]).
 
 use crate::math::Real;
-
-/// The vector instructions a scan runs with: the same ranges, bit for bit, from each (no fused
-/// multiply-add is asked for, so none is used).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Simd {
-    /// What the target has by default.
-    Portable,
-    /// AVX2 and FMA.
-    Avx2,
-    /// AVX2, FMA and AVX-512 (F, VL, DQ, BW): twice the vector registers, mask registers.
-    Avx512,
-}
-
-impl Simd {
-    /// The best this CPU runs.
-    pub(super) fn detect() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::is_x86_feature_detected as has;
-            if has!("avx2") && has!("fma") {
-                if has!("avx512f") && has!("avx512vl") && has!("avx512dq") && has!("avx512bw") {
-                    return Simd::Avx512;
-                }
-                return Simd::Avx2;
-            }
-        }
-        Simd::Portable
-    }
-}
 
 /// The sweep of a planar wall from `a` along `e` (`ae = a × e`, sensor frame) over the beams
 /// `i0..i0 + count` (no wrap: `i0 + count <= best.len()`, a multiple of four, as are the

@@ -27,44 +27,7 @@ use super::lane::Lane;
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 
-/// Instruction-set level the composite kernel runs at.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SimdLevel {
-    /// The baseline target (SSE2 on x86-64): portable, slowest.
-    Portable,
-    /// x86-64 AVX2 + FMA.
-    Avx2,
-    /// x86-64 AVX-512 (F, VL, DQ).
-    Avx512,
-}
-
-impl SimdLevel {
-    /// The best level this CPU supports.
-    pub fn detect() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512vl")
-                && std::arch::is_x86_feature_detected!("avx512dq")
-            {
-                return SimdLevel::Avx512;
-            }
-            if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-                return SimdLevel::Avx2;
-            }
-        }
-        SimdLevel::Portable
-    }
-
-    /// Whether this CPU can run `self`.
-    pub fn is_supported(self) -> bool {
-        match self {
-            SimdLevel::Portable => true,
-            SimdLevel::Avx2 => matches!(Self::detect(), SimdLevel::Avx2 | SimdLevel::Avx512),
-            SimdLevel::Avx512 => Self::detect() == SimdLevel::Avx512,
-        }
-    }
-}
+pub use crate::simd::SimdLevel;
 
 /// The composite barrier and its derivatives at the robot's current pose.
 #[derive(Debug, Clone, Copy, PartialEq)]
