@@ -358,14 +358,15 @@ impl Lidar {
             if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
                 continue;
             }
+            if index.bucket_is_empty(i as usize, j as usize) {
+                continue;
+            }
             let (pieces, bucket_box, groups, start) = index.bucket_pieces(i as usize, j as usize);
-            if pieces.is_empty() {
+            let d2 = f.box_distance2(bucket_box);
+            if d2 > c.max_range * c.max_range {
                 continue;
             }
-            let dmin = f.box_distance(bucket_box);
-            if dmin > c.max_range {
-                continue;
-            }
+            let dmin = d2.sqrt();
             stats.buckets += 1;
             // occlusion culling, away from the sensor: skip the bucket if every beam through
             // the box of its pieces already hits something no farther than the box

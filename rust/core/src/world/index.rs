@@ -208,6 +208,13 @@ impl SegmentIndex {
         &self.ids[self.starts[b] as usize..self.starts[b + 1] as usize]
     }
 
+    /// Whether bucket `(i, j)` holds no piece.
+    #[inline]
+    pub(crate) fn bucket_is_empty(&self, i: usize, j: usize) -> bool {
+        let b = j * self.nx + i;
+        self.piece_starts[b] == self.piece_starts[b + 1]
+    }
+
     /// The pieces of the walls in bucket `(i, j)`, the box `[x0, y0, x1, y1]` holding them
     /// (empty, `x0 > x1`, if there are none), their [`Group`]s (in sub-cell order), and where
     /// they start in [`SegmentIndex::lanes`].
