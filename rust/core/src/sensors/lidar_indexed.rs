@@ -80,7 +80,7 @@ pub struct IndexedScanStats {
 /// Pieces a group needs for the LIDAR to test whether its box is hidden before reading them.
 const GROUP_TEST_MIN: u32 = 8;
 /// Pieces a bucket needs for the LIDAR to read it group by group (fewer are read at once).
-const BUCKET_GROUPS_MIN: u32 = 32;
+const BUCKET_GROUPS_MIN: u32 = 48;
 
 /// Whether none of the `count` ranges from column `j0` (modulo their number, a power of two)
 /// exceeds `d`.
