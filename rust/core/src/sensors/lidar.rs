@@ -330,9 +330,8 @@ impl Lidar {
         let cr = cross2(p, q);
         if cr == 0.0 {
             // collinear with the sensor: only the beams at the end points can hit
-            let inv_step = self.config.columns as Real / std::f64::consts::TAU;
             for e in [p, q] {
-                let f = fast_atan2(e[1], e[0]) * inv_step;
+                let f = fast_atan2(e[1], e[0]) * self.inv_step;
                 let j0 = ifloor(f) - 1;
                 self.sweep(a, b, height, j0, ((iceil(f) + 1 - j0 + 1) as usize).min(self.config.columns), zs, dmin, best);
             }
