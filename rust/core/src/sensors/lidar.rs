@@ -431,11 +431,7 @@ impl Lidar {
         let e = [b[0] - a[0], b[1] - a[1]];
         let ae = cross2(a, e);
         let mut parallel = false;
-        #[cfg(target_arch = "x86_64")]
-        let simd = self.simd != SimdLevel::Portable && i0 + count <= n;
-        #[cfg(not(target_arch = "x86_64"))]
-        let simd = false;
-        if simd {
+        if cfg!(target_arch = "x86_64") && self.simd != SimdLevel::Portable && i0 + count <= n {
             #[cfg(target_arch = "x86_64")]
             {
                 // SAFETY: `simd` is not `Portable` only on a CPU found to run AVX2.
