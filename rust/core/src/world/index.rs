@@ -209,7 +209,7 @@ impl SegmentIndex {
     }
 
     /// Whether bucket `(i, j)` holds no piece.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn bucket_is_empty(&self, i: usize, j: usize) -> bool {
         let b = j * self.nx + i;
         self.piece_starts[b] == self.piece_starts[b + 1]
@@ -218,7 +218,7 @@ impl SegmentIndex {
     /// The pieces of the walls in bucket `(i, j)`, the box `[x0, y0, x1, y1]` holding them
     /// (empty, `x0 > x1`, if there are none), their [`Group`]s (in sub-cell order), and where
     /// they start in [`SegmentIndex::lanes`].
-    #[inline]
+    #[inline(always)]
     pub(crate) fn bucket_pieces(&self, i: usize, j: usize) -> (&[Piece], [Real; 4], &[Group], usize) {
         let b = j * self.nx + i;
         let start = self.piece_starts[b] as usize;
