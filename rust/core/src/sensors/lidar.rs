@@ -657,8 +657,8 @@ mod tests {
         assert!(worst < 2e-5, "worst {worst}");
     }
 
-    /// The AVX2 and AVX-512 builds of the indexed scan give the portable build's ranges, bit
-    /// for bit, on a generated site and (when `../shared/maps` is beside the repository) on
+    /// The AVX2 and AVX-512 builds of the indexed scan, and the pieces' beams computed eight
+    /// at once instead of four, give the portable build's ranges, bit for bit, on a generated site and (when `../shared/maps` is beside the repository) on
     /// the most cluttered real map.
     #[cfg(target_arch = "x86_64")]
     #[test]
@@ -697,13 +697,16 @@ mod tests {
                     }
                     let sp = l.sensor_pose(pose);
                     l.simd = SimdLevel::Portable;
-                    l.sweep_index(&index, &[], sp, &mut scans[0]);
+                    l.sweep_index::<4>(&index, &[], sp, &mut scans[0]);
+                    // (eight pieces at once, as the AVX-512 build does, on any CPU)
+                    l.sweep_index::<8>(&index, &[], sp, &mut scans[3]);
                     l.simd = SimdLevel::Avx2;
                     // SAFETY: this CPU runs AVX2 and FMA (`best` is not `Portable`).
                     unsafe { l.sweep_index_avx2(&index, &[], sp, &mut scans[1]) };
                     let bits = |s: &Scan| s.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
                     assert!(scans[0].ranges.iter().filter(|r| r.is_finite()).count() > 300 * channels);
                     assert_eq!(bits(&scans[0]), bits(&scans[1]), "{name}: AVX2, {channels} channels, pose {k}");
+                    assert_eq!(bits(&scans[0]), bits(&scans[3]), "{name}: eight pieces at once, {channels} channels, pose {k}");
                     if best == SimdLevel::Avx512 {
                         l.simd = SimdLevel::Avx512;
                         // SAFETY: this CPU runs AVX-512.

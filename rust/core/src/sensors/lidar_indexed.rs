@@ -182,30 +182,31 @@ impl Lidar {
 
     /// The [`BeamLanes`] of the `m` pieces of `l` from `k0` seen from the sensor `f`, written
     /// to `out` from its start: the same arithmetic as piece by
-    /// piece, in blocks of [`LANES`] (past the last piece, `l`'s padding is computed and ignored).
+    /// piece, in blocks of `L` (at most [`LANES`]; past the last piece, `l`'s padding is
+    /// computed and ignored).
     #[inline(always)]
-    fn piece_beams(&self, l: &PieceLanes, k0: usize, m: usize, f: &SensorFrame, out: &mut BeamLanes) {
+    fn piece_beams<const L: usize>(&self, l: &PieceLanes, k0: usize, m: usize, f: &SensorFrame, out: &mut BeamLanes) {
         let c = &self.config;
         let (planar, zs, max2) = (c.channels == 1, c.mount.z, c.max_range * c.max_range);
-        let nb = m.div_ceil(LANES);
-        let len = nb * LANES;
+        let nb = m.div_ceil(L);
+        let len = nb * L;
         // the blocks, every lane sliced to the same length once (no bounds checks inside)
-        fn blocks(v: &[Real], r: std::ops::Range<usize>) -> &[[Real; LANES]] {
-            v[r].as_chunks::<LANES>().0
+        fn blocks<const L: usize>(v: &[Real], r: std::ops::Range<usize>) -> &[[Real; L]] {
+            v[r].as_chunks::<L>().0
         }
         let r = k0..k0 + len;
-        let (px, py, qx, qy, ax, ay) = (blocks(&l.px, r.clone()), blocks(&l.py, r.clone()), blocks(&l.qx, r.clone()), blocks(&l.qy, r.clone()), blocks(&l.ax, r.clone()), blocks(&l.ay, r.clone()));
-        let (ex, ey, height) = (blocks(&l.ex, r.clone()), blocks(&l.ey, r.clone()), blocks(&l.height, r));
-        let one_sided = l.one_sided[k0..k0 + len].as_chunks::<LANES>().0;
-        let j0_out = out.j0[..len].as_chunks_mut::<LANES>().0;
-        let count_out = out.count[..len].as_chunks_mut::<LANES>().0;
-        let box2_out = out.box2[..len].as_chunks_mut::<LANES>().0;
-        let keep_out = out.keep[..len].as_chunks_mut::<LANES>().0;
-        let collinear_out = out.collinear[..len].as_chunks_mut::<LANES>().0;
+        let (px, py, qx, qy, ax, ay) = (blocks::<L>(&l.px, r.clone()), blocks::<L>(&l.py, r.clone()), blocks::<L>(&l.qx, r.clone()), blocks::<L>(&l.qy, r.clone()), blocks::<L>(&l.ax, r.clone()), blocks::<L>(&l.ay, r.clone()));
+        let (ex, ey, height) = (blocks::<L>(&l.ex, r.clone()), blocks::<L>(&l.ey, r.clone()), blocks::<L>(&l.height, r));
+        let one_sided = l.one_sided[k0..k0 + len].as_chunks::<L>().0;
+        let j0_out = out.j0[..len].as_chunks_mut::<L>().0;
+        let count_out = out.count[..len].as_chunks_mut::<L>().0;
+        let box2_out = out.box2[..len].as_chunks_mut::<L>().0;
+        let keep_out = out.keep[..len].as_chunks_mut::<L>().0;
+        let collinear_out = out.collinear[..len].as_chunks_mut::<L>().0;
         for blk in 0..nb {
             let (px, py, qx, qy, ax, ay, ex, ey, height, one_sided) = (&px[blk], &py[blk], &qx[blk], &qy[blk], &ax[blk], &ay[blk], &ex[blk], &ey[blk], &height[blk], &one_sided[blk]);
-            let (mut j0s, mut counts, mut box2s, mut keep, mut collinear) = ([0i64; LANES], [0usize; LANES], [0.0; LANES], [false; LANES], [false; LANES]);
-            for i in 0..LANES {
+            let (mut j0s, mut counts, mut box2s, mut keep, mut collinear) = ([0i64; L], [0usize; L], [0.0; L], [false; L], [false; L]);
+            for i in 0..L {
                 let faces = !one_sided[i] | (cross2([ex[i], ey[i]], [f.x - ax[i], f.y - ay[i]]) < 0.0);
                 // squared distance to the piece's box: a lower bound of the piece's (exact for
                 // the axis-aligned walls of grid maps), without division or root
@@ -228,11 +229,11 @@ impl Lidar {
     /// their sweeps.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn sweep_run(&self, lanes: &PieceLanes, start: usize, pieces: &[Piece], run: std::ops::Range<usize>, f: &SensorFrame, beams: &mut BeamLanes, ranges: &mut [Real], stats: &mut IndexedScanStats) {
+    fn sweep_run<const L: usize>(&self, lanes: &PieceLanes, start: usize, pieces: &[Piece], run: std::ops::Range<usize>, f: &SensorFrame, beams: &mut BeamLanes, ranges: &mut [Real], stats: &mut IndexedScanStats) {
         if run.is_empty() {
             return;
         }
-        self.piece_beams(lanes, start + run.start, run.len(), f, beams);
+        self.piece_beams::<L>(lanes, start + run.start, run.len(), f, beams);
         stats.walls_visited += run.len();
         self.sweep_pieces(&pieces[run], beams, f, ranges, stats);
     }
@@ -289,7 +290,7 @@ impl Lidar {
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
             SimdLevel::Avx2 => unsafe { self.sweep_index_avx2(index, extra, sp, out) },
-            _ => self.sweep_index(index, extra, sp, out),
+            _ => self.sweep_index::<4>(index, extra, sp, out),
         }
         self.finish(rng, out);
         Ok(())
@@ -300,20 +301,22 @@ impl Lidar {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn sweep_index_avx2(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
-        self.sweep_index(index, extra, sp, out);
+        self.sweep_index::<4>(index, extra, sp, out);
     }
 
     /// [`Lidar::sweep_index`] built for AVX-512 (same ranges): twice the vector registers,
-    /// and mask registers, for the many values of [`Lidar::piece_beams`].
+    /// and mask registers, for the many values of [`Lidar::piece_beams`], which computes eight
+    /// pieces at once (four with AVX2, whose sixteen registers eight would overflow).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq")]
     pub(super) fn sweep_index_avx512(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
-        self.sweep_index(index, extra, sp, out);
+        self.sweep_index::<8>(index, extra, sp, out);
     }
 
-    /// The ranges of [`Lidar::scan_indexed_into`] before limits and noise.
+    /// The ranges of [`Lidar::scan_indexed_into`] before limits and noise, the pieces' beams
+    /// computed `L` pieces at once (at most [`LANES`]).
     #[inline(always)]
-    pub(super) fn sweep_index(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
+    pub(super) fn sweep_index<const L: usize>(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         let c = self.config;
         let kch = c.channels;
         let f = SensorFrame::new(sp);
@@ -378,7 +381,7 @@ impl Lidar {
             if pieces.len() < BUCKET_GROUPS_MIN as usize {
                 // a small bucket: all its pieces at once, whether each faces the sensor decided
                 // piece by piece
-                self.sweep_run(lanes, start, pieces, 0..pieces.len(), &f, &mut beams, &mut out.ranges, &mut stats);
+                self.sweep_run::<L>(lanes, start, pieces, 0..pieces.len(), &f, &mut beams, &mut out.ranges, &mut stats);
                 continue;
             }
             for &g in index.group_order(i as usize, j as usize, [sp.x, sp.y]) {
@@ -405,12 +408,12 @@ impl Lidar {
                 let behind = index.behind(grp);
                 for (k, &to) in grp.ends.iter().enumerate() {
                     if k < SECTORS && is_behind(&behind[k], sp.x, sp.y) {
-                        self.sweep_run(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
+                        self.sweep_run::<L>(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
                         run = to as usize;
                     }
                     from = to as usize;
                 }
-                self.sweep_run(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
+                self.sweep_run::<L>(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
             }
         }
         scratch.beams = beams;

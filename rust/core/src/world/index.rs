@@ -323,8 +323,9 @@ pub(crate) struct PieceLanes {
     pub one_sided: Vec<bool>,
 }
 
-/// Pieces computed at once from [`PieceLanes`], which hold as many padding pieces past the last.
-pub(crate) const LANES: usize = 4;
+/// The most pieces computed at once from [`PieceLanes`], which hold as many padding pieces
+/// past the last.
+pub(crate) const LANES: usize = 8;
 
 impl PieceLanes {
     /// The lanes of `pieces`, padded (with copies of a zero-length wall at the origin).
