@@ -125,6 +125,21 @@ fn silhouette(x: Real, y: Real, x0: Real, y0: Real, x1: Real, y1: Real) -> ([Rea
     }
 }
 
+/// [`silhouette`] as selects, for several boxes at once (see [`Lidar::box_beams`]); the
+/// branches are faster for one box at a time. The same corners (tested).
+#[inline(always)]
+fn silhouette_lanes(x: Real, y: Real, x0: Real, y0: Real, x1: Real, y1: Real) -> ([Real; 2], [Real; 2]) {
+    let (left, right, below, above) = (x < x0, x > x1, y < y0, y > y1);
+    // beside a corner: the other two corners; beside an edge: that edge's ends
+    let diag1 = (left & below) | (right & above);
+    let diag2 = (left & above) | (right & below);
+    let beside = left | right;
+    let xs = if left { x0 } else { x1 };
+    let ys = if below { y0 } else { y1 };
+    let pick = |d1: Real, d2: Real, side: Real, other: Real| if diag1 { d1 } else if diag2 { d2 } else if beside { side } else { other };
+    ([pick(x1, x0, xs, x0), pick(y0, y0, y0, ys)], [pick(x0, x1, xs, x1), pick(y1, y1, y1, ys)])
+}
+
 /// The sensor's pose in the world, with its yaw's sine and cosine.
 #[derive(Debug, Clone, Copy)]
 struct SensorFrame {
@@ -177,7 +192,33 @@ impl Lidar {
         let (a, b) = (f.point(p), f.point(q));
         let cr = cross2(a, b);
         let (j0, count) = self.wall_beams(a, b, cr);
-        cr != 0.0 && none_beyond(ranges, j0, count, dmin)
+        self.hidden((j0, count, cr != 0.0), dmin, ranges)
+    }
+
+    /// [`Lidar::box_hidden`] for a box whose beams `(j0, count, sides)` are known (see
+    /// [`Lidar::box_beams`]).
+    #[inline(always)]
+    fn hidden(&self, (j0, count, sides): (i64, usize, bool), dmin: Real, ranges: &[Real]) -> bool {
+        self.config.channels == 1 && dmin != 0.0 && sides && none_beyond(ranges, j0, count, dmin)
+    }
+
+    /// The beams through each of the boxes `[x0, y0, x1, y1]` (not empty, the sensor `f`
+    /// outside them), `L` at once: the first column and count of [`Lidar::wall_beams`] between
+    /// the two corners the box lies between as seen from the sensor (see [`silhouette`], here
+    /// [`silhouette_lanes`]), and
+    /// whether those corners are on either side of the sensor (else the beams are not used).
+    #[inline(always)]
+    fn box_beams<const L: usize>(&self, boxes: &[[Real; 4]; L], f: &SensorFrame) -> ([i64; L], [usize; L], [bool; L]) {
+        let (mut j0s, mut counts, mut sides) = ([0i64; L], [0usize; L], [false; L]);
+        for k in 0..L {
+            let [x0, y0, x1, y1] = boxes[k];
+            let (p, q) = silhouette_lanes(f.x, f.y, x0, y0, x1, y1);
+            let (a, b) = (f.point(p), f.point(q));
+            let cr = cross2(a, b);
+            (j0s[k], counts[k]) = self.wall_beams(a, b, cr);
+            sides[k] = cr != 0.0;
+        }
+        (j0s, counts, sides)
     }
 
     /// The [`BeamLanes`] of the `m` pieces of `l` from `k0` seen from the sensor `f`, written
@@ -356,68 +397,107 @@ impl Lidar {
         let mut stats = IndexedScanStats::default();
         let mut beams = std::mem::take(&mut scratch.beams);
         let lanes = index.lanes();
-        for &(di, dj) in &scratch.offsets {
-            let (i, j) = (ci + di as i64, cj + dj as i64);
-            if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 {
-                continue;
-            }
-            if index.bucket_is_empty(i as usize, j as usize) {
-                continue;
-            }
-            let (pieces, bucket_box, groups, start) = index.bucket_pieces(i as usize, j as usize);
-            let d2 = f.box_distance2(bucket_box);
-            if d2 > c.max_range * c.max_range {
-                continue;
-            }
-            let dmin = d2.sqrt();
-            stats.buckets += 1;
-            // occlusion culling, away from the sensor: skip the bucket if every beam through
-            // the box of its pieces already hits something no farther than the box
-            if self.box_hidden(bucket_box, dmin, &f, &out.ranges) {
-                stats.buckets_occluded += 1;
-                continue;
-            }
-            beams.reserve(pieces.len() + LANES);
-            if pieces.len() < BUCKET_GROUPS_MIN as usize {
-                // a small bucket: all its pieces at once, whether each faces the sensor decided
-                // piece by piece
-                self.sweep_run::<L>(lanes, start, pieces, 0..pieces.len(), &f, &mut beams, &mut out.ranges, &mut stats);
-                continue;
-            }
-            for &g in index.group_order(i as usize, j as usize, [sp.x, sp.y]) {
-                let grp = &groups[g as usize];
-                if grp.start == grp.ends[CLASSES - 1] {
+        let max2 = c.max_range * c.max_range;
+        let mut next = 0;
+        while next < scratch.offsets.len() {
+            // the next `L` non-empty buckets in range, in order, their boxes' beams at once
+            let (mut found, mut cells, mut boxes) = (0, [(0usize, 0usize); L], [[0.0; 4]; L]);
+            while next < scratch.offsets.len() && found < L {
+                let (di, dj) = scratch.offsets[next];
+                next += 1;
+                let (i, j) = (ci + di as i64, cj + dj as i64);
+                if i < 0 || j < 0 || i >= nx as i64 || j >= ny as i64 || index.bucket_is_empty(i as usize, j as usize) {
                     continue;
                 }
-                // occlusion culling, away from the sensor: skip the group if every beam through
+                let bx = index.bucket_box(i as usize, j as usize);
+                if f.box_distance2(bx) > max2 {
+                    continue;
+                }
+                (cells[found], boxes[found]) = ((i as usize, j as usize), bx);
+                found += 1;
+            }
+            for k in found..L {
+                // (padding, computed and ignored)
+                boxes[k] = boxes[0];
+            }
+            let (j0s, counts, sides) = self.box_beams::<L>(&boxes, &f);
+            for k in 0..found {
+                let ((i, j), bucket_box) = (cells[k], boxes[k]);
+                let (pieces, _, groups, start) = index.bucket_pieces(i, j);
+                let dmin = f.box_distance2(bucket_box).sqrt();
+                stats.buckets += 1;
+                // occlusion culling, away from the sensor: skip the bucket if every beam through
                 // the box of its pieces already hits something no farther than the box
-                // (a group of a few pieces is cheaper read than tested)
-                if grp.ends[CLASSES - 1] - grp.start >= GROUP_TEST_MIN {
-                    let d = f.box_distance(grp.bx);
-                    if d > c.max_range || self.box_hidden(grp.bx, d, &f, &out.ranges) {
-                        stats.groups_occluded += 1;
+                if self.hidden((j0s[k], counts[k], sides[k]), dmin, &out.ranges) {
+                    stats.buckets_occluded += 1;
+                    continue;
+                }
+                beams.reserve(pieces.len() + LANES);
+                if pieces.len() < BUCKET_GROUPS_MIN as usize {
+                    // a small bucket: all its pieces at once, whether each faces the sensor decided
+                    // piece by piece
+                    self.sweep_run::<L>(lanes, start, pieces, 0..pieces.len(), &f, &mut beams, &mut out.ranges, &mut stats);
+                    continue;
+                }
+                for &g in index.group_order(i, j, [sp.x, sp.y]) {
+                    let grp = &groups[g as usize];
+                    if grp.start == grp.ends[CLASSES - 1] {
                         continue;
                     }
-                }
-                // the pieces that face the sensor, are tall enough and in range, without
-                // branches; a class of one-sided pieces that all face away is not read at all
-                // (see `world::index::is_behind`): per run of consecutive classes not skipped,
-                // the beams of all its pieces at once (independent, in lanes of four), then
-                // their sweeps
-                let (mut run, mut from) = (grp.start as usize, grp.start as usize);
-                let behind = index.behind(grp);
-                for (k, &to) in grp.ends.iter().enumerate() {
-                    if k < SECTORS && is_behind(&behind[k], sp.x, sp.y) {
-                        self.sweep_run::<L>(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
-                        run = to as usize;
+                    // occlusion culling, away from the sensor: skip the group if every beam through
+                    // the box of its pieces already hits something no farther than the box
+                    // (a group of a few pieces is cheaper read than tested)
+                    if grp.ends[CLASSES - 1] - grp.start >= GROUP_TEST_MIN {
+                        let d = f.box_distance(grp.bx);
+                        if d > c.max_range || self.box_hidden(grp.bx, d, &f, &out.ranges) {
+                            stats.groups_occluded += 1;
+                            continue;
+                        }
                     }
-                    from = to as usize;
+                    // the pieces that face the sensor, are tall enough and in range, without
+                    // branches; a class of one-sided pieces that all face away is not read at all
+                    // (see `world::index::is_behind`): per run of consecutive classes not skipped,
+                    // the beams of all its pieces at once (independent, in lanes of four), then
+                    // their sweeps
+                    let (mut run, mut from) = (grp.start as usize, grp.start as usize);
+                    let behind = index.behind(grp);
+                    for (k, &to) in grp.ends.iter().enumerate() {
+                        if k < SECTORS && is_behind(&behind[k], sp.x, sp.y) {
+                            self.sweep_run::<L>(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
+                            run = to as usize;
+                        }
+                        from = to as usize;
+                    }
+                    self.sweep_run::<L>(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
                 }
-                self.sweep_run::<L>(lanes, start, pieces, run..from, &f, &mut beams, &mut out.ranges, &mut stats);
             }
         }
         scratch.beams = beams;
         scratch.stats = stats;
         self.indexed = scratch;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// The silhouette as selects gives the branches' corners from every side of a box: the
+    /// eight around it, on its edges' lines, and inside it.
+    #[test]
+    fn silhouette_lanes_equals_silhouette() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let (x0, y0, x1, y1) = (1.0, -2.0, 3.0, 0.5);
+        let mut sides = std::collections::HashSet::new();
+        for _ in 0..20_000 {
+            // from points on a grid through the box's edges, so that some lie on their lines
+            let x = [-1.0, x0, 2.0, x1, 5.0][rng.random_range(0..5)] + if rng.random_bool(0.5) { rng.random_range(-0.5..0.5) } else { 0.0 };
+            let y = [-4.0, y0, 0.0, y1, 2.0][rng.random_range(0..5)] + if rng.random_bool(0.5) { rng.random_range(-0.5..0.5) } else { 0.0 };
+            sides.insert(((x < x0) as i8 - (x > x1) as i8, (y < y0) as i8 - (y > y1) as i8));
+            assert_eq!(silhouette(x, y, x0, y0, x1, y1), silhouette_lanes(x, y, x0, y0, x1, y1), "from ({x}, {y})");
+        }
+        assert_eq!(sides.len(), 9, "every side of the box and its inside: {sides:?}");
     }
 }

@@ -215,6 +215,13 @@ impl SegmentIndex {
         self.piece_starts[b] == self.piece_starts[b + 1]
     }
 
+    /// The box `[x0, y0, x1, y1]` of the pieces in bucket `(i, j)` (empty, `x0 > x1`, if there
+    /// are none).
+    #[inline(always)]
+    pub(crate) fn bucket_box(&self, i: usize, j: usize) -> [Real; 4] {
+        self.content[j * self.nx + i]
+    }
+
     /// The pieces of the walls in bucket `(i, j)`, the box `[x0, y0, x1, y1]` holding them
     /// (empty, `x0 > x1`, if there are none), their [`Group`]s (in sub-cell order), and where
     /// they start in [`SegmentIndex::lanes`].
