@@ -658,8 +658,8 @@ mod tests {
     }
 
     /// The AVX2 and AVX-512 builds of the indexed scan, and the pieces' beams computed eight
-    /// at once instead of four, give the portable build's ranges, bit for bit, on a generated site and (when `../shared/maps` is beside the repository) on
-    /// the most cluttered real map.
+    /// at once instead of four, give the portable build's ranges, bit for bit, on a generated
+    /// site and (when `../shared/maps` is beside the repository) on the most cluttered real map.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn vector_scans_equal_portable_scans() {

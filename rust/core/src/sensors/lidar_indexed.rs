@@ -202,11 +202,11 @@ impl Lidar {
         self.config.channels == 1 && dmin != 0.0 && sides && none_beyond(ranges, j0, count, dmin)
     }
 
-    /// The beams through each of the boxes `[x0, y0, x1, y1]` (not empty, the sensor `f`
-    /// outside them), `L` at once: the first column and count of [`Lidar::wall_beams`] between
-    /// the two corners the box lies between as seen from the sensor (see [`silhouette`], here
-    /// [`silhouette_lanes`]), and
-    /// whether those corners are on either side of the sensor (else the beams are not used).
+    /// The beams through each of the boxes `[x0, y0, x1, y1]` (not empty), `L` at once, as
+    /// [`Lidar::box_hidden`] finds them (for a sensor `f` outside the box): the first column
+    /// and count of [`Lidar::wall_beams`] between the two corners the box lies between
+    /// ([`silhouette_lanes`]), and whether those are not in line with the sensor (else the
+    /// beams are not used).
     #[inline(always)]
     fn box_beams<const L: usize>(&self, boxes: &[[Real; 4]; L], f: &SensorFrame) -> ([i64; L], [usize; L], [bool; L]) {
         let (mut j0s, mut counts, mut sides) = ([0i64; L], [0usize; L], [false; L]);
@@ -401,7 +401,7 @@ impl Lidar {
         let mut next = 0;
         while next < scratch.offsets.len() {
             // the next `L` non-empty buckets in range, in order, their boxes' beams at once
-            let (mut found, mut cells, mut boxes) = (0, [(0usize, 0usize); L], [[0.0; 4]; L]);
+            let (mut found, mut cells, mut boxes, mut d2s) = (0, [(0usize, 0usize); L], [[0.0; 4]; L], [0.0; L]);
             while next < scratch.offsets.len() && found < L {
                 let (di, dj) = scratch.offsets[next];
                 next += 1;
@@ -410,10 +410,11 @@ impl Lidar {
                     continue;
                 }
                 let bx = index.bucket_box(i as usize, j as usize);
-                if f.box_distance2(bx) > max2 {
+                let d2 = f.box_distance2(bx);
+                if d2 > max2 {
                     continue;
                 }
-                (cells[found], boxes[found]) = ((i as usize, j as usize), bx);
+                (cells[found], boxes[found], d2s[found]) = ((i as usize, j as usize), bx, d2);
                 found += 1;
             }
             for k in found..L {
@@ -422,9 +423,9 @@ impl Lidar {
             }
             let (j0s, counts, sides) = self.box_beams::<L>(&boxes, &f);
             for k in 0..found {
-                let ((i, j), bucket_box) = (cells[k], boxes[k]);
+                let (i, j) = cells[k];
                 let (pieces, _, groups, start) = index.bucket_pieces(i, j);
-                let dmin = f.box_distance2(bucket_box).sqrt();
+                let dmin = d2s[k].sqrt();
                 stats.buckets += 1;
                 // occlusion culling, away from the sensor: skip the bucket if every beam through
                 // the box of its pieces already hits something no farther than the box
@@ -457,7 +458,7 @@ impl Lidar {
                     // the pieces that face the sensor, are tall enough and in range, without
                     // branches; a class of one-sided pieces that all face away is not read at all
                     // (see `world::index::is_behind`): per run of consecutive classes not skipped,
-                    // the beams of all its pieces at once (independent, in lanes of four), then
+                    // the beams of all its pieces at once (independent, in lanes of `L`), then
                     // their sweeps
                     let (mut run, mut from) = (grp.start as usize, grp.start as usize);
                     let behind = index.behind(grp);
