@@ -10,6 +10,13 @@ use rand_chacha::ChaCha8Rng;
 use shieldnav_core::sensors::{Lidar, LidarConfig, Scan};
 use shieldnav_core::world::{load_ros_map, preset, Pose2, RosMapOptions, Segment, SegmentIndex};
 
+#[path = "common.rs"]
+mod common;
+use common::pacing;
+
+/// Poses cycled through by a bench (none repeats within it: see [`pacing`]).
+const POSES: usize = 4096;
+
 /// 200 walls: a 20 × 20 m building outline cut into 2 m pieces (40 walls), 40 boxes
 /// (160 walls), seeded. `solid_boxes`: box edges one-sided (as `StaticMap::add_polygon` stores
 /// furniture), else all walls two-sided.
@@ -41,7 +48,7 @@ fn bench(c: &mut Criterion) {
     let walls = world_200(false);
     let solid = world_200(true);
     assert_eq!(walls.len(), 200);
-    let poses: Vec<Pose2> = (0..16).map(|k| Pose2::new(0.1 * k as f64 - 0.8, 0.05 * k as f64 - 0.4, 0.4 * k as f64)).collect();
+    let poses: Vec<Pose2> = pacing([-0.8, -0.4], [0.7, 0.35], 0.05, POSES, 1).into_iter().map(|[x, y, yaw]| Pose2::new(x, y, yaw)).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let mut scan = Scan::default();
     let mut g = c.benchmark_group("lidar");
@@ -107,13 +114,14 @@ fn bench(c: &mut Criterion) {
         for max_range in [10.0, 20.0] {
             let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range, ..LidarConfig::default() }).unwrap();
             let index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).unwrap();
+            // a robot pacing the 0.75 m in front of the map's start
             let start = m.scenario.start;
+            let poses: Vec<Pose2> = pacing([start.x, start.y], [start.x + 0.75, start.y], 0.02, POSES, 1).into_iter().map(|[x, y, yaw]| Pose2::new(x, y, yaw)).collect();
             let mut k = 0;
             g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}", m.scenario.map.segments.len()), |b| {
                 b.iter(|| {
-                    k = (k + 1) % 16;
-                    let p = Pose2::new(start.x + 0.05 * k as f64, start.y, 0.3 * k as f64);
-                    lidar.scan_indexed_into(black_box(&index), &[], p, 0.0, &mut rng, &mut scan).unwrap();
+                    k = (k + 1) % POSES;
+                    lidar.scan_indexed_into(black_box(&index), &[], poses[k], 0.0, &mut rng, &mut scan).unwrap();
                     black_box(&scan.ranges);
                 })
             });
