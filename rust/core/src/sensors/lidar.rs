@@ -304,16 +304,32 @@ impl Lidar {
             order.sort_unstable();
             for key in &order {
                 let (dmin, a, b, height) = visible[(key & 0xFFFF) as usize];
-                self.sweep_segment(a, b, height, dmin, zs, &mut out.ranges);
+                self.sweep_wall(a, b, height, dmin, zs, &mut out.ranges);
             }
         } else {
             visible.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
             for &(dmin, a, b, height) in &visible {
-                self.sweep_segment(a, b, height, dmin, zs, &mut out.ranges);
+                self.sweep_wall(a, b, height, dmin, zs, &mut out.ranges);
             }
         }
         self.order = order;
         self.visible = visible;
+    }
+
+    /// [`Lidar::sweep_segment`], for a planar scan skipping the wall whose beams all already
+    /// hit no farther than `dmin` and sweeping the others' beams without a test each (in
+    /// blocks: see [`Lidar::sweep_flat`]).
+    #[inline(always)]
+    fn sweep_wall(&self, a: [Real; 2], b: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
+        let cr = cross2(a, b);
+        if self.config.channels > 1 || cr == 0.0 {
+            self.sweep_segment(a, b, height, dmin, zs, best);
+            return;
+        }
+        let (j0, count) = self.wall_beams(a, b, cr);
+        if !super::lidar_indexed::none_beyond(best, j0, count, dmin) {
+            self.sweep_flat(a, b, j0, count, best);
+        }
     }
 
     /// Sweeps one wall given in the sensor frame, `dmin` its distance from the sensor.

@@ -85,7 +85,7 @@ const BUCKET_GROUPS_MIN: u32 = 48;
 /// Whether none of the `count` ranges from column `j0` (modulo their number, a power of two)
 /// exceeds `d`.
 #[inline]
-fn none_beyond(ranges: &[Real], j0: i64, count: usize, d: Real) -> bool {
+pub(super) fn none_beyond(ranges: &[Real], j0: i64, count: usize, d: Real) -> bool {
     let n = ranges.len();
     let i = (j0 & (n as i64 - 1)) as usize;
     let beyond = |s: &[Real]| s.iter().fold(false, |acc, &r| acc | (r > d));
