@@ -167,3 +167,34 @@ fn clearance_equals_brute_force_along_trajectories() {
         assert!(checked > 50, "{}: the trajectory should come near walls ({checked} steps within 1 m)", w.scenario().name);
     }
 }
+
+/// A world of few walls is scanned by sweeping every wall, not through its bucket index (see
+/// `SCAN_ALL_WALLS_MAX`): its scans are the indexed scan's, bit for bit, while the robot turns
+/// and the chair and the door move.
+#[test]
+fn small_worlds_scan_as_the_index_does() {
+    use rand::SeedableRng;
+    use shieldnav_core::sensors::{Lidar, Scan};
+    use shieldnav_core::world::{SegmentIndex, SCAN_ALL_WALLS_MAX};
+    let cfg = WorldConfig { lidar: LidarConfig { range_noise_std: 0.0, ..Default::default() }, ..Default::default() };
+    let mut w = World::from_preset("dynamic_obstacles", cfg).unwrap();
+    assert!(w.scenario().map.segments.len() <= SCAN_ALL_WALLS_MAX && !w.scenario().obstacles.is_empty());
+    let index = SegmentIndex::new(w.scenario().map.segments.clone(), 2.0).unwrap();
+    let mut lidar = Lidar::new(cfg.lidar).unwrap();
+    let (mut scan, mut moving, mut rng) = (Scan::default(), Vec::new(), rand_chacha::ChaCha8Rng::seed_from_u64(0));
+    let bits = |s: &Scan| s.ranges.iter().chain(s.points.iter().flatten()).map(|v| v.to_bits()).collect::<Vec<_>>();
+    let mut scans = 0;
+    for k in 0..(24.0 / 0.02) as usize {
+        let o = w.step([0.2 * (k as f64 * 0.01).sin(), 0.0, 0.3]).unwrap();
+        if o.scanned {
+            moving.clear();
+            for ob in &w.scenario().obstacles {
+                ob.segments_at(w.scan().stamp, &mut moving);
+            }
+            lidar.scan_indexed_into(&index, &moving, w.scan_body_pose(), w.scan().stamp, &mut rng, &mut scan).unwrap();
+            assert_eq!(bits(w.scan()), bits(&scan), "scan at {} s", w.scan().stamp);
+            scans += 1;
+        }
+    }
+    assert!(scans >= 200, "{scans} scans");
+}

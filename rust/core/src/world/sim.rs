@@ -36,6 +36,13 @@ pub const CLEARANCE_BUDGET: Real = 0.25;
 /// prediction and the 1 mm contact tolerance).
 pub const FREE_STEP_MARGIN: Real = 0.05;
 
+/// Worlds of at most this many walls are scanned by sweeping every wall ([`Lidar::scan_into`]),
+/// bigger ones through their bucket index ([`Lidar::scan_indexed_into`]); the ranges are the
+/// same. Measured from a robot pacing near the start: the presets and generated sites (16–96
+/// walls) 2.5–3.2 µs sweeping all against 2.6–4.8 µs indexed; the 200-wall world 14.1 against
+/// 9.7 µs (walls two-sided), 8.8 against 8.4 µs (furniture solid).
+pub const SCAN_ALL_WALLS_MAX: usize = 128;
+
 /// Everything about a world that is not the scenario.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WorldConfig {
@@ -172,7 +179,12 @@ impl World {
         for o in &self.scenario.obstacles {
             o.segments_at(self.time, &mut self.moving);
         }
-        self.lidar.scan_indexed_into(&self.index, &self.moving, pose, self.time, &mut self.rng, &mut self.scan)?;
+        // the same ranges either way (tested); sweeping every wall is faster on small worlds
+        if self.index.segments().len() <= SCAN_ALL_WALLS_MAX {
+            self.lidar.scan_into(&[self.index.segments(), &self.moving], pose, self.time, &mut self.rng, &mut self.scan)?;
+        } else {
+            self.lidar.scan_indexed_into(&self.index, &self.moving, pose, self.time, &mut self.rng, &mut self.scan)?;
+        }
         self.scan_body_pose = pose;
         self.next_scan += self.lidar.period();
         Ok(())
