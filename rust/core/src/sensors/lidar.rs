@@ -320,7 +320,7 @@ impl Lidar {
     /// hit no farther than `dmin` and sweeping the others' beams without a test each (in
     /// blocks: see [`Lidar::sweep_flat`]).
     #[inline(always)]
-    fn sweep_wall(&self, a: [Real; 2], b: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
+    pub(super) fn sweep_wall(&self, a: [Real; 2], b: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
         let cr = cross2(a, b);
         if self.config.channels > 1 || cr == 0.0 {
             self.sweep_segment(a, b, height, dmin, zs, best);
