@@ -304,32 +304,16 @@ impl Lidar {
             order.sort_unstable();
             for key in &order {
                 let (dmin, a, b, height) = visible[(key & 0xFFFF) as usize];
-                self.sweep_wall(a, b, height, dmin, zs, &mut out.ranges);
+                self.sweep_segment(a, b, height, dmin, zs, &mut out.ranges);
             }
         } else {
             visible.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
             for &(dmin, a, b, height) in &visible {
-                self.sweep_wall(a, b, height, dmin, zs, &mut out.ranges);
+                self.sweep_segment(a, b, height, dmin, zs, &mut out.ranges);
             }
         }
         self.order = order;
         self.visible = visible;
-    }
-
-    /// [`Lidar::sweep_segment`], for a planar scan skipping the wall whose beams all already
-    /// hit no farther than `dmin` and sweeping the others' beams without a test each (in
-    /// blocks: see [`Lidar::sweep_flat`]).
-    #[inline(always)]
-    pub(super) fn sweep_wall(&self, a: [Real; 2], b: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
-        let cr = cross2(a, b);
-        if self.config.channels > 1 || cr == 0.0 {
-            self.sweep_segment(a, b, height, dmin, zs, best);
-            return;
-        }
-        let (j0, count) = self.wall_beams(a, b, cr);
-        if !super::lidar_indexed::none_beyond(best, j0, count, dmin) {
-            self.sweep_flat(a, b, j0, count, best);
-        }
     }
 
     /// Sweeps one wall given in the sensor frame, `dmin` its distance from the sensor.
@@ -339,7 +323,9 @@ impl Lidar {
     }
 
     /// Sweeps the beams through the part `p q` of the wall `a b` (sensor frame) with hits on
-    /// the whole wall; `dmin` is no farther than the part.
+    /// the whole wall; `dmin` is no farther than the part. A planar scan skips the wall if
+    /// every such beam already hits no farther than `dmin`, else sweeps them in blocks without
+    /// a test each ([`Lidar::sweep_flat`]).
     #[allow(clippy::too_many_arguments)]
     #[inline]
     pub(super) fn sweep_piece(&self, a: [Real; 2], b: [Real; 2], p: [Real; 2], q: [Real; 2], height: Real, dmin: Real, zs: Real, best: &mut [Real]) {
@@ -354,7 +340,11 @@ impl Lidar {
             return;
         }
         let (j0, count) = self.wall_beams(p, q, cr);
-        self.sweep(a, b, height, j0, count, zs, dmin, best);
+        if self.config.channels > 1 {
+            self.sweep(a, b, height, j0, count, zs, dmin, best);
+        } else if !super::lidar_indexed::none_beyond(best, j0, count, dmin) {
+            self.sweep_flat(a, b, j0, count, best);
+        }
     }
 
     /// The beams a wall `a b` (sensor frame, `cr = a × b ≠ 0`) can hit: the first column (any

@@ -368,7 +368,7 @@ impl Lidar {
             let (a, b) = (f.point(seg.a), f.point(seg.b));
             let d = seg_origin_distance(a, b);
             if d <= c.max_range && !(planar && zs > seg.height) {
-                self.sweep_wall(a, b, seg.height, d, zs, &mut out.ranges);
+                self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
             }
         }
         let cell = index.cell();
