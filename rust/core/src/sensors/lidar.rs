@@ -342,7 +342,7 @@ impl Lidar {
         let (j0, count) = self.wall_beams(p, q, cr);
         if self.config.channels > 1 {
             self.sweep(a, b, height, j0, count, zs, dmin, best);
-        } else if !super::lidar_indexed::none_beyond(best, j0, count, dmin) {
+        } else if !none_beyond(best, j0, count, dmin) {
             self.sweep_flat(a, b, j0, count, best);
         }
     }
@@ -601,6 +601,20 @@ pub(super) fn iceil(x: Real) -> i64 {
 /// How far (rad) [`Lidar::wall_beams`] widens a wall's angular interval: five times the error
 /// bound of [`fast_atan2`] (tested), far below a beam step (3.1e-3 rad at 2048 columns).
 pub(super) const ANGLE_SLACK: Real = 1e-4;
+
+/// Whether none of the `count` ranges from column `j0` (modulo their number, a power of two)
+/// exceeds `d`.
+#[inline]
+pub(super) fn none_beyond(ranges: &[Real], j0: i64, count: usize, d: Real) -> bool {
+    let n = ranges.len();
+    let i = (j0 & (n as i64 - 1)) as usize;
+    let beyond = |s: &[Real]| s.iter().fold(false, |acc, &r| acc | (r > d));
+    if i + count <= n {
+        !beyond(&ranges[i..i + count])
+    } else {
+        !beyond(&ranges[i..]) && !beyond(&ranges[..i + count - n])
+    }
+}
 
 /// The lesser of `a` and `b` (finite), as one instruction (`f64::min` also orders NaNs).
 #[inline(always)]

@@ -12,7 +12,7 @@
 
 use rand::Rng;
 
-use super::lidar::{max, min, seg_origin_distance, Lidar, Scan};
+use super::lidar::{max, min, none_beyond, seg_origin_distance, Lidar, Scan};
 use crate::simd::SimdLevel;
 use crate::error::Result;
 use crate::math::Real;
@@ -81,20 +81,6 @@ pub struct IndexedScanStats {
 const GROUP_TEST_MIN: u32 = 8;
 /// Pieces a bucket needs for the LIDAR to read it group by group (fewer are read at once).
 const BUCKET_GROUPS_MIN: u32 = 48;
-
-/// Whether none of the `count` ranges from column `j0` (modulo their number, a power of two)
-/// exceeds `d`.
-#[inline]
-pub(super) fn none_beyond(ranges: &[Real], j0: i64, count: usize, d: Real) -> bool {
-    let n = ranges.len();
-    let i = (j0 & (n as i64 - 1)) as usize;
-    let beyond = |s: &[Real]| s.iter().fold(false, |acc, &r| acc | (r > d));
-    if i + count <= n {
-        !beyond(&ranges[i..i + count])
-    } else {
-        !beyond(&ranges[i..]) && !beyond(&ranges[..i + count - n])
-    }
-}
 
 /// [`none_beyond`] against a squared distance `d2`.
 #[inline]
