@@ -6,10 +6,11 @@
 //! the 16 poses the benches cycled through until session 13 instead: the CPU's branch
 //! predictors learn that cycle, and those scans ran 10–30 % faster than a robot's would.
 //!
-//! `cargo run --release -p shieldnav-core --example lidar_maps -- [--range M] [--rounds N] [--poses pacing|cycle16] [--maps DIR] [--only NAME]`
+//! `cargo run --release -p shieldnav-core --example lidar_maps -- [--range M] [--rounds N] [--poses pacing|cycle16] [--simplify CELLS] [--maps DIR] [--only NAME]`
 //!
-//! Defaults: `--range 20` (the LIDAR's default), `--rounds 400`, `--poses pacing`, `--maps
-//! ../shared/maps` from the repository's root.
+//! Defaults: `--range 20` (the LIDAR's default), `--rounds 400`, `--poses pacing`,
+//! `--simplify 1` (the maps' default contour tolerance, in cells: `RosMapOptions::simplify`),
+//! `--maps ../shared/maps` from the repository's root.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -32,10 +33,11 @@ struct Args {
     maps: PathBuf,
     only: Option<String>,
     cycle16: bool,
+    simplify: f64,
 }
 
 fn parse() -> Result<Args, String> {
-    let mut args = Args { range: 20.0, rounds: 400, maps: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps"), only: None, cycle16: false };
+    let mut args = Args { range: 20.0, rounds: 400, maps: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps"), only: None, cycle16: false, simplify: RosMapOptions::default().simplify };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         let mut value = || it.next().ok_or_else(|| format!("{flag} needs a value"));
@@ -44,6 +46,7 @@ fn parse() -> Result<Args, String> {
             "--rounds" => args.rounds = value()?.parse().map_err(|e| format!("--rounds: {e}"))?,
             "--maps" => args.maps = PathBuf::from(value()?),
             "--only" => args.only = Some(value()?),
+            "--simplify" => args.simplify = value()?.parse().map_err(|e| format!("--simplify: {e}"))?,
             "--poses" => {
                 args.cycle16 = match value()?.as_str() {
                     "pacing" => false,
@@ -51,7 +54,7 @@ fn parse() -> Result<Args, String> {
                     v => return Err(format!("--poses: expected pacing or cycle16, got {v:?}")),
                 }
             }
-            _ => return Err(format!("unknown argument {flag:?} (expected --range, --rounds, --poses, --maps or --only)")),
+            _ => return Err(format!("unknown argument {flag:?} (expected --range, --rounds, --poses, --simplify, --maps or --only)")),
         }
     }
     if args.rounds == 0 {
@@ -78,7 +81,7 @@ fn main() {
     dirs.sort();
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let poses = if args.cycle16 { "the 16 poses of the benches until session 13, cycled" } else { "a robot pacing" };
-    println!("range {} m, least and median of {} rounds of {SCANS_PER_ROUND} scans, {poses}", args.range, args.rounds);
+    println!("range {} m, contours simplified within {} cells, least and median of {} rounds of {SCANS_PER_ROUND} scans, {poses}", args.range, args.simplify, args.rounds);
     println!("{:<22} {:>6} {:>9} {:>9}  what the last scan did", "map", "walls", "least µs", "median µs");
     for dir in dirs {
         let name = dir.file_name().unwrap_or_default().to_string_lossy().into_owned();
@@ -88,7 +91,7 @@ fn main() {
         let Some(yaml) = std::fs::read_dir(&dir).into_iter().flatten().flatten().map(|f| f.path()).find(|p| p.extension().is_some_and(|x| x == "yaml")) else {
             continue;
         };
-        let m = match load_ros_map(&yaml, &RosMapOptions::default()) {
+        let m = match load_ros_map(&yaml, &RosMapOptions { simplify: args.simplify, ..RosMapOptions::default() }) {
             Ok(m) => m,
             Err(e) => {
                 eprintln!("lidar_maps: {}: {e}", yaml.display());
