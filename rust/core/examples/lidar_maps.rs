@@ -10,14 +10,17 @@
 //! reads the most walls. With `--places K`, the same is timed at `K` seeded places a robot may
 //! stand at anywhere in the start's free region (at least 0.6 m from walls), `--place-rounds`
 //! rounds each, and the spread of their least times is printed: what a robot's scans cost
-//! over a mission through the whole map.
+//! over a mission through the whole map. `--csv PATH` writes every time measured (the start's
+//! and the places') as `map,range_m,where,x,y,least_us` (`benchmarks/plot_scan_cost.py` draws
+//! them on the maps).
 //!
-//! `cargo run --release -p shieldnav-core --example lidar_maps -- [--range M] [--rounds N] [--poses pacing|cycle16] [--simplify CELLS] [--places K] [--place-rounds N] [--maps DIR] [--only NAME]`
+//! `cargo run --release -p shieldnav-core --example lidar_maps -- [--range M] [--rounds N] [--poses pacing|cycle16] [--simplify CELLS] [--places K] [--place-rounds N] [--csv PATH] [--maps DIR] [--only NAME]`
 //!
 //! Defaults: `--range 20` (the LIDAR's default), `--rounds 400`, `--poses pacing`,
 //! `--simplify 1` (the maps' default contour tolerance, in cells: `RosMapOptions::simplify`),
 //! `--places 0`, `--place-rounds 40`, `--maps ../shared/maps` from the repository's root.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -46,10 +49,11 @@ struct Args {
     simplify: f64,
     places: usize,
     place_rounds: usize,
+    csv: Option<PathBuf>,
 }
 
 fn parse() -> Result<Args, String> {
-    let mut args = Args { range: 20.0, rounds: 400, maps: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps"), only: None, cycle16: false, simplify: RosMapOptions::default().simplify, places: 0, place_rounds: 40 };
+    let mut args = Args { range: 20.0, rounds: 400, maps: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps"), only: None, cycle16: false, simplify: RosMapOptions::default().simplify, places: 0, place_rounds: 40, csv: None };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         let mut value = || it.next().ok_or_else(|| format!("{flag} needs a value"));
@@ -59,6 +63,7 @@ fn parse() -> Result<Args, String> {
             "--maps" => args.maps = PathBuf::from(value()?),
             "--only" => args.only = Some(value()?),
             "--simplify" => args.simplify = value()?.parse().map_err(|e| format!("--simplify: {e}"))?,
+            "--csv" => args.csv = Some(PathBuf::from(value()?)),
             "--places" => args.places = value()?.parse().map_err(|e| format!("--places: {e}"))?,
             "--place-rounds" => args.place_rounds = value()?.parse().map_err(|e| format!("--place-rounds: {e}"))?,
             "--poses" => {
@@ -68,7 +73,7 @@ fn parse() -> Result<Args, String> {
                     v => return Err(format!("--poses: expected pacing or cycle16, got {v:?}")),
                 }
             }
-            _ => return Err(format!("unknown argument {flag:?} (expected --range, --rounds, --poses, --simplify, --places, --place-rounds, --maps or --only)")),
+            _ => return Err(format!("unknown argument {flag:?} (expected --range, --rounds, --poses, --simplify, --places, --place-rounds, --csv, --maps or --only)")),
         }
     }
     if args.rounds == 0 || args.place_rounds == 0 {
@@ -78,21 +83,20 @@ fn parse() -> Result<Args, String> {
 }
 
 fn main() {
-    let args = match parse() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("lidar_maps: {e}");
-            std::process::exit(2);
-        }
-    };
+    let args = parse().unwrap_or_else(|e| fail(e));
     let mut dirs: Vec<PathBuf> = match std::fs::read_dir(&args.maps) {
         Ok(d) => d.flatten().map(|e| e.path()).filter(|p| p.is_dir()).collect(),
-        Err(e) => {
-            eprintln!("lidar_maps: cannot read {}: {e}", args.maps.display());
-            std::process::exit(2);
-        }
+        Err(e) => fail(format!("cannot read {}: {e}", args.maps.display())),
     };
     dirs.sort();
+    let mut csv = args.csv.as_ref().map(|path| {
+        let open = || -> std::io::Result<std::io::BufWriter<std::fs::File>> {
+            let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+            writeln!(w, "map,range_m,where,x,y,least_us")?;
+            Ok(w)
+        };
+        (open().unwrap_or_else(|e| fail(format!("cannot write {}: {e}", path.display()))), path.clone())
+    });
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let poses = if args.cycle16 { "the 16 poses of the benches until session 13, cycled" } else { "a robot pacing" };
     println!("range {} m, contours simplified within {} cells, least and median of {} rounds of {SCANS_PER_ROUND} scans, {poses}", args.range, args.simplify, args.rounds);
@@ -113,13 +117,7 @@ fn main() {
             }
         };
         let config = LidarConfig { range_noise_std: 0.0, max_range: args.range, ..LidarConfig::default() };
-        let mut lidar = match Lidar::new(config) {
-            Ok(l) => l,
-            Err(e) => {
-                eprintln!("lidar_maps: {e}");
-                std::process::exit(2);
-            }
-        };
+        let mut lidar = Lidar::new(config).unwrap_or_else(|e| fail(e.to_string()));
         let index = SegmentIndex::new(m.scenario.map.segments.clone(), 2.0).expect("a loaded map's walls are finite");
         let start = m.scenario.start;
         let pool: Vec<Pose2> = if args.cycle16 {
@@ -128,6 +126,14 @@ fn main() {
             common::pacing([start.x, start.y], [start.x + 0.75, start.y], 0.02, POOL, 1).into_iter().map(|[x, y, yaw]| Pose2::new(x, y, yaw)).collect()
         };
         let (least, median) = time_scans(&mut lidar, &index, &pool, args.rounds, &mut rng);
+        let mut record = |place: &str, x: f64, y: f64, us: f64| {
+            if let Some((w, path)) = csv.as_mut() {
+                if let Err(e) = writeln!(w, "{name},{},{place},{x:.3},{y:.3},{us:.3}", args.range) {
+                    fail(format!("cannot write {}: {e}", path.display()));
+                }
+            }
+        };
+        record("start", start.x, start.y, least);
         let s = lidar.last_indexed_stats();
         println!(
             "{name:<22} {:>6} {:>9.2} {:>9.2}  {} buckets ({} culled), {} pieces read, {} swept, {} culled one by one",
@@ -149,6 +155,9 @@ fn main() {
                     (time_scans(&mut lidar, &index, &pool, args.place_rounds, &mut rng).0, [x, y])
                 })
                 .collect();
+            for &(us, [x, y]) in &times {
+                record("place", x, y, us);
+            }
             times.sort_by(|a, b| a.0.total_cmp(&b.0));
             let q = |f: f64| times[((times.len() - 1) as f64 * f).round() as usize].0;
             let (worst, at) = times[times.len() - 1];
@@ -166,6 +175,18 @@ fn main() {
             );
         }
     }
+    if let Some((mut w, path)) = csv {
+        if let Err(e) = w.flush() {
+            fail(format!("cannot write {}: {e}", path.display()));
+        }
+        println!("wrote {}", path.display());
+    }
+}
+
+/// Prints `lidar_maps: {message}` and exits with status 2.
+fn fail(message: String) -> ! {
+    eprintln!("lidar_maps: {message}");
+    std::process::exit(2);
 }
 
 /// The least and the median time (µs) per scan over `rounds` rounds of [`SCANS_PER_ROUND`]
