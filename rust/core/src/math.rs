@@ -57,8 +57,8 @@ pub fn orthonormality_error(m: &Mat3) -> Real {
     for i in 0..3 {
         for j in 0..3 {
             let mut s = 0.0;
-            for k in 0..3 {
-                s += m[k][i] * m[k][j];
+            for row in m {
+                s += row[i] * row[j];
             }
             let target = if i == j { 1.0 } else { 0.0 };
             worst = worst.max((s - target).abs());

@@ -13,6 +13,11 @@ use shieldnav_core::world::Pose2;
 use crate::config::{episode_config, episode_defaults, SiteArgs};
 use crate::errors::{invalid, to_py};
 
+/// What `Episode.step` returns: Gymnasium's `(observation, reward, terminated, truncated, info)`.
+type Step<'py> = (Bound<'py, PyArray1<f32>>, f64, bool, bool, Bound<'py, PyDict>);
+/// What `Episode.scan_points` returns: the points and their validity mask.
+type ScanPoints<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<i8>>);
+
 fn pose_tuple(p: Pose2) -> (f64, f64, f64) {
     (p.x, p.y, p.yaw)
 }
@@ -135,17 +140,7 @@ impl PyEpisode {
 
     /// One control period. Returns `(observation, reward, terminated, truncated, info)`; the
     /// observation is a new float32 array.
-    fn step<'py>(
-        &mut self,
-        py: Python<'py>,
-        action: &Bound<'py, PyAny>,
-    ) -> PyResult<(
-        Bound<'py, PyArray1<f32>>,
-        f64,
-        bool,
-        bool,
-        Bound<'py, PyDict>,
-    )> {
+    fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<Step<'py>> {
         let a = action3(action)?;
         let r = self.inner.step(a).map_err(to_py)?;
         let obs = self.observe(py)?;
@@ -169,7 +164,7 @@ impl PyEpisode {
     fn scan_points<'py>(
         &self,
         py: Python<'py>,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<i8>>)> {
+    ) -> PyResult<ScanPoints<'py>> {
         let scan = self.inner.world().scan();
         let n = scan.channels * scan.columns;
         let pts = PyArray2::<f32>::zeros(py, [n, 3], false);

@@ -92,7 +92,7 @@ fn helper(shared: Arc<Shared>, k: usize) {
                 break g;
             }
             spins = spins.wrapping_add(1);
-            if spins % 64 == 0 && start.elapsed() > SPIN {
+            if spins.is_multiple_of(64) && start.elapsed() > SPIN {
                 shared.sleeping[k].store(true, Ordering::SeqCst);
                 if generation(shared.ticket.load(Ordering::SeqCst)) == seen && !shared.shutdown.load(Ordering::SeqCst) {
                     std::thread::park();
@@ -185,7 +185,7 @@ impl Pool {
             let mut spins = 0u32;
             while s.done.load(Ordering::Acquire) != n {
                 spins = spins.wrapping_add(1);
-                if spins % 1024 == 0 {
+                if spins.is_multiple_of(1024) {
                     std::thread::yield_now();
                 } else {
                     std::hint::spin_loop();

@@ -102,7 +102,7 @@ impl ViewPlanner {
     }
 
     fn load(&mut self, points_body: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<()> {
-        if stride != 2 && stride != 3 || points_body.len() % stride != 0 {
+        if stride != 2 && stride != 3 || !points_body.len().is_multiple_of(stride) {
             return Err(Error::invalid("points", format!("expected rows of 2 or 3 coordinates, got {} values with stride {stride}", points_body.len())));
         }
         if points_body.iter().chain(position.iter()).any(|v| !v.is_finite()) || !yaw.is_finite() {

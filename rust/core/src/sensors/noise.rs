@@ -24,8 +24,9 @@ pub fn unit_uniform(x: u64) -> Real {
     (x >> 11) as Real * EPS53
 }
 
-// AS241's PPND7 coefficients (Wichura 1988), lowest power first.
+// AS241's PPND7 coefficients (Wichura 1988), lowest power first, as published.
 const CENTRAL_NUM: [f32; 4] = [3.387_132_7, 50.434_27, 159.291_13, 59.109_375];
+#[allow(clippy::excessive_precision)]
 const CENTRAL_DEN: [f32; 4] = [1.0, 17.895_17, 78.757_76, 67.187_564];
 const NEAR_NUM: [f32; 4] = [1.423_437_3, 2.756_815_4, 1.306_728_5, 0.170_238_21];
 const NEAR_DEN: [f32; 3] = [1.0, 0.737_001_64, 0.120_211_33];

@@ -348,7 +348,7 @@ pub fn evaluate_composite_moved<T: Lane>(pts: &[T], stride: usize, motion: Optio
     if stride != 2 && stride != 3 {
         return Err(Error::invalid("points", format!("points need 2 or 3 coordinates, got {stride}")));
     }
-    if pts.len() % stride != 0 {
+    if !pts.len().is_multiple_of(stride) {
         return Err(Error::invalid("points", format!("{} values do not make rows of {stride}", pts.len())));
     }
     if dim > stride {

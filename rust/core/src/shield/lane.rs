@@ -58,6 +58,9 @@ fn select<T: Copy>(c: bool, a: T, b: T) -> T {
     }
 }
 
+// (the polynomials' coefficients as fitted: digits past f32's precision kept, and a last one
+// that is ln 2 only to within the fit)
+#[allow(clippy::excessive_precision, clippy::approx_constant)]
 impl Lane for f32 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
@@ -127,6 +130,9 @@ impl Lane for f32 {
     }
 }
 
+// (the polynomials' coefficients as fitted: digits past f64's precision kept, and a last one
+// that is ln 2 only to within the fit)
+#[allow(clippy::excessive_precision, clippy::approx_constant)]
 impl Lane for f64 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;

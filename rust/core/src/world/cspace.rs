@@ -214,7 +214,7 @@ fn footprint_rows(e: &Pool, e_idx: &[u32], cover: &Cover, w: usize, h: usize) ->
     let mw = words_for(nw);
     let eat = |t: i64| if t < 0 || t >= h as i64 { 0 } else { e_idx[t as usize] };
     let changes = row_changes(e, e_idx, mw);
-    let last_mask = if w % 64 == 0 { !0 } else { (1u64 << (w % 64)) - 1 };
+    let last_mask = if w.is_multiple_of(64) { !0 } else { (1u64 << (w % 64)) - 1 };
     let mut space = Space { height: h, row_group: vec![0; ORIENTATIONS * h], groups: vec![(0, 0)], runs: Vec::new(), parent: Vec::new() };
     let mut cur = vec![0u64; nw];
     // per row of F_k, the words to recompute (mw u64 of word bits per row)

@@ -393,7 +393,6 @@ fn carve_rooms(rng: &mut ChaCha8Rng, grid: &mut OccupancyGrid, corridors: &[Corr
             }
         }
     }
-    drop(try_room);
     (rooms, sealed)
 }
 
