@@ -146,8 +146,11 @@ fn main() {
             s.walls_swept,
             s.walls_occluded
         );
-        if args.places > 0 {
-            let spots = places(&m, args.places, 7);
+        let spots = if args.places > 0 { places(&m, args.places, 7) } else { Vec::new() };
+        if args.places > 0 && spots.is_empty() {
+            println!("{:<22} no place at least {PLACE_CLEARANCE} m from walls", "");
+        }
+        if !spots.is_empty() {
             let mut times: Vec<(f64, [f64; 2])> = spots
                 .iter()
                 .map(|&[x, y]| {
