@@ -46,6 +46,8 @@ def main() -> None:
 
     times = read_times(args.csv)
     ranges = sorted({t[4] for rows in times.values() for t in rows})
+    if not ranges:
+        raise SystemExit(f"{args.csv}: no times (only its header)")
     if args.range is None and len(ranges) > 1:
         raise SystemExit(f"{args.csv} holds times at ranges {ranges} m: pick one with --range")
     rng = args.range if args.range is not None else ranges[0]
