@@ -26,7 +26,7 @@ use std::time::Instant;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use shieldnav_core::sensors::{Lidar, LidarConfig, Scan};
+use shieldnav_core::sensors::{Lidar, LidarConfig, Scan, ScanMesh};
 use shieldnav_core::world::{load_ros_map, Cell, Pose2, RosMap, RosMapOptions, SegmentIndex};
 
 #[path = "../benches/common.rs"]
@@ -50,10 +50,11 @@ struct Args {
     places: usize,
     place_rounds: usize,
     csv: Option<PathBuf>,
+    mesh: bool,
 }
 
 fn parse() -> Result<Args, String> {
-    let mut args = Args { range: 20.0, rounds: 400, maps: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps"), only: None, cycle16: false, simplify: RosMapOptions::default().simplify, places: 0, place_rounds: 40, csv: None };
+    let mut args = Args { range: 20.0, rounds: 400, maps: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps"), only: None, cycle16: false, simplify: RosMapOptions::default().simplify, places: 0, place_rounds: 40, csv: None, mesh: false };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         let mut value = || it.next().ok_or_else(|| format!("{flag} needs a value"));
@@ -64,6 +65,7 @@ fn parse() -> Result<Args, String> {
             "--only" => args.only = Some(value()?),
             "--simplify" => args.simplify = value()?.parse().map_err(|e| format!("--simplify: {e}"))?,
             "--csv" => args.csv = Some(PathBuf::from(value()?)),
+            "--mesh" => args.mesh = true,
             "--places" => args.places = value()?.parse().map_err(|e| format!("--places: {e}"))?,
             "--place-rounds" => args.place_rounds = value()?.parse().map_err(|e| format!("--place-rounds: {e}"))?,
             "--poses" => {
@@ -125,7 +127,26 @@ fn main() {
         } else {
             common::pacing([start.x, start.y], [start.x + 0.75, start.y], 0.02, POOL, 1).into_iter().map(|[x, y, yaw]| Pose2::new(x, y, yaw)).collect()
         };
-        let (least, median) = time_scans(&mut lidar, &index, &pool, args.rounds, &mut rng);
+        let mesh = if args.mesh {
+            let t = Instant::now();
+            let mesh = ScanMesh::new(&m.scenario.map.segments).unwrap_or_else(|e| fail(format!("{name}: no mesh: {e:?}")));
+            eprintln!("{name}: mesh of {} triangles in {:.1} ms", mesh.triangles(), t.elapsed().as_secs_f64() * 1e3);
+            let (mut a, mut b) = (Scan::default(), Scan::default());
+            let (mut bad, mut tri, mut rec, mut sw) = (0, 0, 0, 0);
+            for &p in &pool {
+                lidar.scan_indexed_into(&index, &[], p, 0.0, &mut rng, &mut a).unwrap();
+                lidar.scan_mesh_into(&mesh, &index, &[], p, 0.0, &mut rng, &mut b).unwrap();
+                bad += a.ranges.iter().zip(&b.ranges).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
+                tri += lidar.last_mesh_stats().triangles;
+                rec += lidar.last_mesh_stats().beams_recast;
+                sw += lidar.last_mesh_stats().walls_swept;
+            }
+            eprintln!("{name}: {bad} beams differ over {} scans; {:.0} triangles, {:.0} walls swept, {rec} recast", pool.len(), tri as f64 / pool.len() as f64, sw as f64 / pool.len() as f64);
+            Some(mesh)
+        } else {
+            None
+        };
+        let (least, median) = time_scans(&mut lidar, &index, mesh.as_ref(), &pool, args.rounds, &mut rng);
         let mut record = |place: &str, x: f64, y: f64, us: f64| {
             if let Some((w, path)) = csv.as_mut() {
                 if let Err(e) = writeln!(w, "{name},{},{place},{x:.3},{y:.3},{us:.3}", args.range) {
@@ -155,7 +176,7 @@ fn main() {
                 .iter()
                 .map(|&[x, y]| {
                     let pool: Vec<Pose2> = common::pacing([x - 0.375, y], [x + 0.375, y], 0.02, args.place_rounds * SCANS_PER_ROUND, 1).into_iter().map(|[x, y, yaw]| Pose2::new(x, y, yaw)).collect();
-                    (time_scans(&mut lidar, &index, &pool, args.place_rounds, &mut rng).0, [x, y])
+                    (time_scans(&mut lidar, &index, mesh.as_ref(), &pool, args.place_rounds, &mut rng).0, [x, y])
                 })
                 .collect();
             for &(us, [x, y]) in &times {
@@ -194,14 +215,18 @@ fn fail(message: String) -> ! {
 
 /// The least and the median time (µs) per scan over `rounds` rounds of [`SCANS_PER_ROUND`]
 /// scans from `pool`'s poses in order (wrapping).
-fn time_scans(lidar: &mut Lidar, index: &SegmentIndex, pool: &[Pose2], rounds: usize, rng: &mut ChaCha8Rng) -> (f64, f64) {
+fn time_scans(lidar: &mut Lidar, index: &SegmentIndex, mesh: Option<&ScanMesh>, pool: &[Pose2], rounds: usize, rng: &mut ChaCha8Rng) -> (f64, f64) {
     let mut scan = Scan::default();
     let mut times = Vec::with_capacity(rounds);
     for r in 0..rounds {
         let from = r * SCANS_PER_ROUND % pool.len();
         let t = Instant::now();
         for &p in &pool[from..from + SCANS_PER_ROUND] {
-            lidar.scan_indexed_into(index, &[], p, 0.0, rng, &mut scan).expect("a valid pose");
+            match mesh {
+                Some(mesh) => lidar.scan_mesh_into(mesh, index, &[], p, 0.0, rng, &mut scan),
+                None => lidar.scan_indexed_into(index, &[], p, 0.0, rng, &mut scan),
+            }
+            .expect("a valid pose");
             std::hint::black_box(&scan.ranges);
         }
         times.push(t.elapsed().as_secs_f64() * 1e6 / SCANS_PER_ROUND as f64);

@@ -171,10 +171,10 @@ impl Scan {
 #[derive(Debug, Clone)]
 pub struct Lidar {
     pub(super) config: LidarConfig,
-    az_cos: Vec<Real>,
-    az_sin: Vec<Real>,
+    pub(super) az_cos: Vec<Real>,
+    pub(super) az_sin: Vec<Real>,
     /// Columns per radian.
-    inv_step: Real,
+    pub(super) inv_step: Real,
     el_tan: Vec<Real>,
     el_sec: Vec<Real>,
     el_cos: Vec<Real>,
@@ -185,6 +185,8 @@ pub struct Lidar {
     order: Vec<u64>,
     /// Scratch of [`Lidar::scan_indexed_into`].
     pub(super) indexed: super::lidar_indexed::IndexedScratch,
+    /// Scratch of [`Lidar::scan_mesh_into`].
+    pub(super) mesh: super::lidar_mesh::MeshScratch,
     /// Scratch of the noise draws (one normal per beam).
     normals: Vec<f32>,
     /// Scratch of the dropout draws (one uniform per beam).
@@ -213,6 +215,7 @@ impl Lidar {
             visible: Vec::new(),
             order: Vec::new(),
             indexed: Default::default(),
+            mesh: Default::default(),
             normals: Vec::new(),
             uniforms: Vec::new(),
             simd: SimdLevel::detect(),

@@ -17,6 +17,7 @@ use crate::simd::SimdLevel;
 use crate::error::Result;
 use crate::math::Real;
 use crate::world::index::{is_behind, Piece, PieceLanes, CLASSES, LANES, SECTORS};
+use super::lidar_mesh::ScanMesh;
 use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
@@ -301,15 +302,37 @@ impl Lidar {
         }
     }
 
-    /// What the last [`Lidar::scan_indexed_into`] did (buckets visited and culled, walls swept).
-    pub fn last_indexed_stats(&self) -> IndexedScanStats {
-        self.indexed.stats
+    /// Sweeps `extra` (moving obstacles, few) from the sensor pose `sp`, each wall whole.
+    #[inline]
+    pub(super) fn sweep_extra(&self, extra: &[Segment], sp: Pose2, ranges: &mut [Real]) {
+        let c = self.config;
+        let f = SensorFrame::new(sp);
+        let zs = c.mount.z;
+        for seg in extra.iter().filter(|s| s.faces([sp.x, sp.y])) {
+            let (a, b) = (f.point(seg.a), f.point(seg.b));
+            let d = seg_origin_distance(a, b);
+            if d <= c.max_range && !(c.channels == 1 && zs > seg.height) {
+                self.sweep_segment(a, b, seg.height, d, zs, ranges);
+            }
+        }
     }
 
-    /// Scans the walls of `index` plus `extra` (moving obstacles, few) from a robot at `body`.
-    /// Ranges are identical to [`Lidar::scan_into`] over the same walls.
-    pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
+    /// Scans the walls of `index` plus `extra` as [`Lidar::scan_indexed_into`] does, a planar
+    /// scan by walking `mesh` (a [`ScanMesh`] of the same walls) where it can: the same ranges.
+    #[allow(clippy::too_many_arguments)]
+    pub fn scan_mesh_into<R: Rng + ?Sized>(&mut self, mesh: &ScanMesh, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
         let sp = self.begin_scan(body, stamp, out)?;
+        if self.sweep_mesh(mesh, sp, out) {
+            self.sweep_extra(extra, sp, &mut out.ranges);
+        } else {
+            self.sweep_index_any(index, extra, sp, out);
+        }
+        self.finish(rng, out);
+        Ok(())
+    }
+
+    /// [`Lidar::sweep_index`] with the vector instructions of this CPU.
+    fn sweep_index_any(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         match self.simd {
             // SAFETY: `simd` is found from the CPU: it runs these instructions.
             #[cfg(target_arch = "x86_64")]
@@ -319,6 +342,18 @@ impl Lidar {
             SimdLevel::Avx2 => unsafe { self.sweep_index_avx2(index, extra, sp, out) },
             _ => self.sweep_index::<4>(index, extra, sp, out),
         }
+    }
+
+    /// What the last [`Lidar::scan_indexed_into`] did (buckets visited and culled, walls swept).
+    pub fn last_indexed_stats(&self) -> IndexedScanStats {
+        self.indexed.stats
+    }
+
+    /// Scans the walls of `index` plus `extra` (moving obstacles, few) from a robot at `body`.
+    /// Ranges are identical to [`Lidar::scan_into`] over the same walls.
+    pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
+        let sp = self.begin_scan(body, stamp, out)?;
+        self.sweep_index_any(index, extra, sp, out);
         self.finish(rng, out);
         Ok(())
     }
@@ -345,18 +380,9 @@ impl Lidar {
     #[inline(always)]
     pub(super) fn sweep_index<const L: usize>(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         let c = self.config;
-        let kch = c.channels;
         let f = SensorFrame::new(sp);
-        let zs = c.mount.z;
-        let planar = kch == 1;
         let mut scratch = std::mem::take(&mut self.indexed);
-        for seg in extra.iter().filter(|s| s.faces([sp.x, sp.y])) {
-            let (a, b) = (f.point(seg.a), f.point(seg.b));
-            let d = seg_origin_distance(a, b);
-            if d <= c.max_range && !(planar && zs > seg.height) {
-                self.sweep_segment(a, b, seg.height, d, zs, &mut out.ranges);
-            }
-        }
+        self.sweep_extra(extra, sp, &mut out.ranges);
         let cell = index.cell();
         let (nx, ny) = index.dims();
         // offsets beyond the index's extent are never inside it

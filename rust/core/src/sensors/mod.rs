@@ -5,6 +5,7 @@
 
 pub mod lidar;
 mod lidar_indexed;
+mod lidar_mesh;
 pub mod noise;
 pub mod odometry;
 mod ray_segment;
@@ -12,5 +13,6 @@ mod simd;
 
 pub use lidar::{Lidar, LidarConfig, LidarMount, Scan};
 pub use lidar_indexed::IndexedScanStats;
+pub use lidar_mesh::{MeshScanStats, NoMesh, ScanMesh};
 pub use odometry::{Odometry, OdometryConfig, OdometryFault};
 pub use ray_segment::ray_segment_distance;

@@ -1,0 +1,550 @@
+//! The planar LIDAR on big maps by walking a triangulation of the walls: every beam is
+//! followed from the triangle the sensor stands in, across triangle edges, until the first
+//! wall edge it crosses. Beams travel in windows (runs of consecutive columns through one
+//! edge), so a triangle is entered once per window and split by its third corner; a window
+//! through a gap narrower than a beam step holds no beam and ends there. Only what the sensor
+//! can see is read: no wall behind another is ever looked at.
+//!
+//! The walls are the constraints of a constrained Delaunay triangulation (`spade`), in a box
+//! around them. A wall edge stops the beams of its window when the wall blocks them (faces
+//! the sensor, and stands higher than a planar ring); their ranges are the wall's exact f64
+//! hits (the hit of the whole wall, as [`Lidar::scan_into`] computes it), so the ranges equal
+//! the other scans' bit for bit. A beam that passes exactly through a corner of the
+//! triangulation, or that the wall's own hit test misses, is cast again against every wall.
+
+use std::collections::HashMap;
+
+use spade::handles::FixedVertexHandle;
+use spade::{ConstrainedDelaunayTriangulation, PositionInTriangulation, Triangulation};
+
+use super::lidar::{fast_atan2, iceil, Lidar, Scan};
+use crate::math::Real;
+use crate::simd::SimdLevel;
+use crate::world::{cross2, sub2, Pose2, Segment};
+
+/// "None" in the triangle tables.
+const NONE: u32 = u32::MAX;
+
+/// One triangle, one cache line: its corners counter-clockwise, and per edge `k` (from corner
+/// `k` to `k + 1`) a link: the triangle across it (0: outside the box) in the low 29 bits,
+/// that edge's place among the neighbour's edges in the next two, and whether walls lie on
+/// it in the top bit (then [`ScanMesh::tri_walls`] says which).
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Tri {
+    p: [[Real; 2]; 3],
+    link: [u32; 3],
+}
+
+/// The triangle of a link.
+const LINK_TRI: u32 = (1 << 29) - 1;
+/// A link's wall bit.
+const LINK_WALL: u32 = 1 << 31;
+
+/// Beams `j0..j1` (columns, unwrapped) entering triangle `t` through its edge `e`, whose ends
+/// (sensor frame) are `pv` (corner `e`, counter-clockwise as the sensor sees it) and `pu`
+/// (corner `e + 1`).
+#[derive(Debug, Clone, Copy)]
+struct Window {
+    pv: [Real; 2],
+    pu: [Real; 2],
+    j0: i32,
+    j1: i32,
+    t: u32,
+    e: u32,
+}
+
+/// Why a set of walls has no [`ScanMesh`]; the scans then use the bucket index.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NoMesh(pub String);
+
+/// A triangulation of a world's walls for the planar scan (see the module's doc).
+#[derive(Debug, Clone)]
+pub struct ScanMesh {
+    segments: Vec<Segment>,
+    /// Index 0 is the outside of the box; the others in the order of their middles along a
+    /// Z curve, so that neighbours are mostly near in memory.
+    tris: Vec<Tri>,
+    /// Per triangle and edge, the walls on it (an index into `edge_walls`), or [`NONE`].
+    tri_walls: Vec<[u32; 3]>,
+    /// Per wall edge, the range of its walls in `wall_ids`.
+    edge_walls: Vec<[u32; 2]>,
+    wall_ids: Vec<u32>,
+    /// A triangle at the centre of each cell of a grid over the walls' box.
+    grid: Vec<u32>,
+    grid_origin: [Real; 2],
+    grid_cell: Real,
+    grid_dims: (usize, usize),
+}
+
+/// What the last [`Lidar::scan_mesh_into`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MeshScanStats {
+    /// Triangles entered (once per window).
+    pub triangles: usize,
+    /// Wall edges whose beams were swept.
+    pub walls_swept: usize,
+    /// Beams cast again against every wall.
+    pub beams_recast: usize,
+    /// Whether the scan fell back to the bucket index (the sensor on an edge, or outside).
+    pub fell_back: bool,
+}
+
+/// Reusable buffers of the mesh scan.
+#[derive(Debug, Clone, Default)]
+pub(super) struct MeshScratch {
+    stack: Vec<Window>,
+    recast: Vec<u32>,
+    pub(super) stats: MeshScanStats,
+}
+
+impl ScanMesh {
+    /// Triangulates `segments` (finite, of non-zero length, crossing nowhere but at their ends).
+    pub fn new(segments: &[Segment]) -> Result<Self, NoMesh> {
+        let mut ids: HashMap<(u64, u64), u32> = HashMap::with_capacity(segments.len() * 2);
+        let mut pts: Vec<spade::Point2<Real>> = Vec::with_capacity(segments.len() * 2 + 4);
+        let (mut lo, mut hi) = ([Real::INFINITY; 2], [Real::NEG_INFINITY; 2]);
+        let mut id = |p: [Real; 2], pts: &mut Vec<spade::Point2<Real>>| {
+            *ids.entry((p[0].to_bits(), p[1].to_bits())).or_insert_with(|| {
+                pts.push(spade::Point2::new(p[0], p[1]));
+                (pts.len() - 1) as u32
+            })
+        };
+        let mut ends = Vec::with_capacity(segments.len());
+        for (k, s) in segments.iter().enumerate() {
+            if !(s.a.iter().chain(&s.b).all(|v| v.is_finite() && v.abs() < 1e7)) || s.a == s.b {
+                return Err(NoMesh(format!("wall {k} is not finite or has no length")));
+            }
+            for p in [s.a, s.b] {
+                for i in 0..2 {
+                    lo[i] = lo[i].min(p[i]);
+                    hi[i] = hi[i].max(p[i]);
+                }
+            }
+            ends.push((id(s.a, &mut pts), id(s.b, &mut pts)));
+        }
+        if segments.is_empty() {
+            return Err(NoMesh("no walls".into()));
+        }
+        let margin = 1.0 + 0.05 * (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        for (x, y) in [(lo[0] - margin, lo[1] - margin), (hi[0] + margin, lo[1] - margin), (hi[0] + margin, hi[1] + margin), (lo[0] - margin, hi[1] + margin)] {
+            id([x, y], &mut pts);
+        }
+        let mut pairs: Vec<[usize; 2]> = ends.iter().map(|&(a, b)| if a < b { [a as usize, b as usize] } else { [b as usize, a as usize] }).collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        let n_pts = pts.len();
+        let mut conflicts = 0usize;
+        let cdt = ConstrainedDelaunayTriangulation::<spade::Point2<Real>>::try_bulk_load_cdt(pts, pairs, |_| conflicts += 1)
+            .map_err(|e| NoMesh(format!("triangulation failed: {e:?}")))?;
+        if conflicts > 0 {
+            return Err(NoMesh(format!("{conflicts} walls cross others")));
+        }
+        if cdt.num_vertices() != n_pts {
+            return Err(NoMesh("vertices merged".into()));
+        }
+        let verts: Vec<[Real; 2]> = cdt.vertices().map(|v| [v.position().x, v.position().y]).collect();
+        // the walls on each constraint edge: follow each wall from its start along constraint
+        // edges through the vertices lying on it
+        let mut on_edge: HashMap<usize, Vec<u32>> = HashMap::new();
+        for (k, &(a, b)) in ends.iter().enumerate() {
+            let (pa, pb) = (verts[a as usize], verts[b as usize]);
+            let ab = sub2(pb, pa);
+            let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+            let along = |p: [Real; 2]| {
+                let d = sub2(p, pa);
+                (cross2(ab, d).abs() <= 1e-9 * l2, d[0] * ab[0] + d[1] * ab[1])
+            };
+            let mut cur = a as usize;
+            let mut steps = 0;
+            while cur != b as usize {
+                let (_, t_cur) = along(verts[cur]);
+                let v = cdt.vertex(FixedVertexHandle::from_index(cur));
+                let next = v.out_edges().find(|e| {
+                    let to = e.to().index();
+                    let (on, t) = along(verts[to]);
+                    e.as_undirected().is_constraint_edge() && on && t > t_cur && t <= l2 * (1.0 + 1e-12)
+                });
+                let Some(e) = next else {
+                    return Err(NoMesh(format!("wall {k} not found in the triangulation")));
+                };
+                on_edge.entry(e.as_undirected().fix().index()).or_default().push(k as u32);
+                cur = e.to().index();
+                steps += 1;
+                if steps > n_pts {
+                    return Err(NoMesh(format!("wall {k} not found in the triangulation")));
+                }
+            }
+        }
+        let mut edge_walls = Vec::with_capacity(on_edge.len());
+        let mut wall_ids = Vec::with_capacity(segments.len());
+        let mut edge_slot: HashMap<usize, u32> = HashMap::with_capacity(on_edge.len());
+        let mut keys: Vec<usize> = on_edge.keys().copied().collect();
+        keys.sort_unstable();
+        for e in keys {
+            let ws = &on_edge[&e];
+            edge_slot.insert(e, edge_walls.len() as u32);
+            edge_walls.push([wall_ids.len() as u32, (wall_ids.len() + ws.len()) as u32]);
+            wall_ids.extend_from_slice(ws);
+        }
+        // triangles: corners, neighbours, walls (spade's face indices, 0 the outside)
+        let nf = cdt.num_all_faces();
+        let (mut v, mut nbr, mut walls) = (vec![[0u32; 3]; nf], vec![[0u32; 3]; nf], vec![[NONE; 3]; nf]);
+        for f in cdt.inner_faces() {
+            let es = f.adjacent_edges();
+            let i = f.fix().index();
+            for k in 0..3 {
+                v[i][k] = es[k].from().index() as u32;
+                nbr[i][k] = es[k].rev().face().fix().index() as u32;
+                walls[i][k] = edge_slot.get(&es[k].as_undirected().fix().index()).copied().unwrap_or(NONE);
+            }
+        }
+        if nf as u64 > LINK_TRI as u64 {
+            return Err(NoMesh(format!("{nf} triangles, too many")));
+        }
+        // renumbered along a Z curve of their middles (0 stays the outside)
+        let morton = |x: Real, y: Real| {
+            let q = |t: Real| (t.clamp(0.0, 1.0) * 65535.0) as u64;
+            let spread = |mut a: u64| {
+                a = (a | (a << 8)) & 0x00FF_00FF;
+                a = (a | (a << 4)) & 0x0F0F_0F0F;
+                a = (a | (a << 2)) & 0x3333_3333;
+                (a | (a << 1)) & 0x5555_5555
+            };
+            spread(q((x - lo[0]) / (hi[0] - lo[0]).max(1e-9))) | spread(q((y - lo[1]) / (hi[1] - lo[1]).max(1e-9))) << 1
+        };
+        let mut order: Vec<(u64, usize)> = (1..nf)
+            .map(|i| {
+                let c = v[i].map(|k| verts[k as usize]);
+                (morton((c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0), i)
+            })
+            .collect();
+        order.sort_unstable();
+        let mut new_of = vec![0u32; nf];
+        for (k, &(_, i)) in order.iter().enumerate() {
+            new_of[i] = k as u32 + 1;
+        }
+        let mut tris = vec![Tri { p: [[0.0; 2]; 3], link: [0; 3] }; nf];
+        let mut tri_walls = vec![[NONE; 3]; nf];
+        for i in 1..nf {
+            let t = new_of[i] as usize;
+            tri_walls[t] = walls[i];
+            for k in 0..3 {
+                tris[t].p[k] = verts[v[i][k] as usize];
+                let n = nbr[i][k] as usize;
+                let back = if n == 0 {
+                    0
+                } else {
+                    let (a, b) = (v[i][k], v[i][(k + 1) % 3]);
+                    (0..3).find(|&m| v[n][m] == b && v[n][(m + 1) % 3] == a).ok_or_else(|| NoMesh("inconsistent triangulation".into()))? as u32
+                };
+                tris[t].link[k] = new_of[n] | back << 29 | if walls[i][k] != NONE { LINK_WALL } else { 0 };
+            }
+        }
+        // the locator grid
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let cell = (extent / 256.0).max(1.0);
+        let dims = (((hi[0] - lo[0]) / cell).floor() as usize + 1, ((hi[1] - lo[1]) / cell).floor() as usize + 1);
+        let mut grid = Vec::with_capacity(dims.0 * dims.1);
+        for j in 0..dims.1 {
+            for i in 0..dims.0 {
+                let p = spade::Point2::new(lo[0] + (i as Real + 0.5) * cell, lo[1] + (j as Real + 0.5) * cell);
+                let t = match cdt.locate(p) {
+                    PositionInTriangulation::OnFace(f) => f.index(),
+                    PositionInTriangulation::OnEdge(e) | PositionInTriangulation::OutsideOfConvexHull(e) => {
+                        let e = cdt.directed_edge(e);
+                        e.face().as_inner().or_else(|| e.rev().face().as_inner()).map_or(0, |f| f.fix().index())
+                    }
+                    PositionInTriangulation::OnVertex(v) => cdt.vertex(v).out_edges().find_map(|e| e.face().as_inner()).map_or(0, |f| f.fix().index()),
+                    PositionInTriangulation::NoTriangulation => 0,
+                };
+                grid.push(new_of[t.max(1)]);
+            }
+        }
+        Ok(Self { segments: segments.to_vec(), tris, tri_walls, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims })
+    }
+
+    /// The walls.
+    pub fn segments(&self) -> &[Segment] {
+        &self.segments
+    }
+
+    /// Triangles (for reports).
+    pub fn triangles(&self) -> usize {
+        self.tris.len() - 1
+    }
+
+    /// The triangle holding `s` strictly inside, found by walking from the grid's; `None` on
+    /// an edge's line or outside the box.
+    fn locate(&self, s: [Real; 2]) -> Option<usize> {
+        let (nx, ny) = self.grid_dims;
+        let gi = (((s[0] - self.grid_origin[0]) / self.grid_cell).floor().max(0.0) as usize).min(nx - 1);
+        let gj = (((s[1] - self.grid_origin[1]) / self.grid_cell).floor().max(0.0) as usize).min(ny - 1);
+        let mut t = self.grid[gj * nx + gi] as usize;
+        for _ in 0..1 << 16 {
+            let tr = &self.tris[t];
+            let mut next = None;
+            for k in 0..3 {
+                let (a, b) = (tr.p[k], tr.p[(k + 1) % 3]);
+                let o = cross2(sub2(b, a), sub2(s, a));
+                if o == 0.0 {
+                    return None;
+                }
+                if o < 0.0 && next.is_none() {
+                    next = Some((tr.link[k] & LINK_TRI) as usize);
+                }
+            }
+            match next {
+                None => return Some(t),
+                Some(0) => return None,
+                Some(n) => t = n,
+            }
+        }
+        None
+    }
+}
+
+impl Lidar {
+    /// What the last [`Lidar::scan_mesh_into`] did.
+    pub fn last_mesh_stats(&self) -> MeshScanStats {
+        self.mesh.stats
+    }
+
+    /// The ranges of a planar scan of `mesh`'s walls from the sensor pose `sp` into `out`
+    /// (every range `inf` before); `false` (ranges untouched) if the sensor stands on a line
+    /// of the triangulation or outside it, or the scan is not planar.
+    pub(super) fn sweep_mesh(&mut self, mesh: &ScanMesh, sp: Pose2, out: &mut Scan) -> bool {
+        let mut scratch = std::mem::take(&mut self.mesh);
+        scratch.stats = MeshScanStats::default();
+        let ok = self.config.channels == 1
+            && match self.simd {
+                // SAFETY: `simd` is found from the CPU: it runs these instructions.
+                #[cfg(target_arch = "x86_64")]
+                SimdLevel::Avx512 | SimdLevel::Avx2 => unsafe { self.walk_avx2(mesh, sp, &mut out.ranges, &mut scratch) },
+                _ => self.walk(mesh, sp, &mut out.ranges, &mut scratch),
+            };
+        scratch.stats.fell_back = !ok;
+        self.mesh = scratch;
+        ok
+    }
+
+    /// [`Lidar::walk`] built for AVX2 and FMA (the same ranges: no fused multiply-add is
+    /// asked for).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn walk_avx2(&self, mesh: &ScanMesh, sp: Pose2, ranges: &mut [Real], sc: &mut MeshScratch) -> bool {
+        self.walk(mesh, sp, ranges, sc)
+    }
+
+    #[inline(always)]
+    fn walk(&self, mesh: &ScanMesh, sp: Pose2, ranges: &mut [Real], sc: &mut MeshScratch) -> bool {
+        let s = [sp.x, sp.y];
+        let Some(t0) = mesh.locate(s) else {
+            return false;
+        };
+        let c = self.config;
+        let (ys, yc) = sp.yaw.sin_cos();
+        let w = Walker { lidar: self, mesh, s, ys, yc, mask: c.columns as i64 - 1, r2: c.max_range * c.max_range, zs: c.mount.z };
+        let n = c.columns as i64;
+        let recast = &mut sc.recast;
+        recast.clear();
+        let stack = &mut sc.stack;
+        stack.clear();
+        let stats = &mut sc.stats;
+        let tr = &mesh.tris[t0];
+        let p: [[Real; 2]; 3] = std::array::from_fn(|k| w.frame(tr.p[k]));
+        let c0 = w.col(p[0], recast);
+        let mut c1 = w.col(p[1], recast);
+        c1 += n * (c1 < c0) as i64;
+        let mut c2 = w.col(p[2], recast);
+        c2 += n * (c2 < c1) as i64;
+        let windows: [(i64, i64); 3] = [(c0, c1), (c1, c2), (c2, c0 + n)];
+        for (k, &(j0, j1)) in windows.iter().enumerate() {
+            if let Some(next) = w.edge(tr, t0, k, p[k], p[(k + 1) % 3], j0, j1, ranges, recast, &mut stats.walls_swept) {
+                stack.push(next);
+            }
+        }
+        let mut cur = stack.pop();
+        while let Some(win) = cur {
+            stats.triangles += 1;
+            let tr = &mesh.tris[win.t as usize];
+            let e = win.e as usize;
+            let (k1, k2) = (NEXT[e], NEXT[NEXT[e]]);
+            // the third corner splits the window
+            let pw = w.frame(tr.p[k2]);
+            let (j0, j1) = (win.j0 as i64, win.j1 as i64);
+            let m = w.split(pw, j0, j1, recast);
+            let left = w.edge(tr, win.t as usize, k1, win.pu, pw, j0, m, ranges, recast, &mut stats.walls_swept);
+            let right = w.edge(tr, win.t as usize, k2, pw, win.pv, m, j1, ranges, recast, &mut stats.walls_swept);
+            // on through one side at once, the other later
+            cur = match (left, right) {
+                (Some(l), Some(r)) => {
+                    stack.push(r);
+                    Some(l)
+                }
+                (Some(x), None) | (None, Some(x)) => Some(x),
+                (None, None) => stack.pop(),
+            };
+        }
+        // beams through a corner, or missed by the wall they crossed: against every wall
+        recast.sort_unstable();
+        recast.dedup();
+        stats.beams_recast = recast.len();
+        for &i in recast.iter() {
+            let i = i as usize;
+            ranges[i] = Real::INFINITY;
+            for seg in &mesh.segments {
+                if w.zs > seg.height || !seg.faces(s) {
+                    continue;
+                }
+                self.sweep(w.frame(seg.a), w.frame(seg.b), seg.height, i as i64, 1, w.zs, -1.0, ranges);
+            }
+        }
+        true
+    }
+}
+
+/// The next corner of a triangle.
+const NEXT: [usize; 3] = [1, 2, 0];
+
+/// One scan's walk (see [`Lidar::walk`]).
+struct Walker<'a> {
+    lidar: &'a Lidar,
+    mesh: &'a ScanMesh,
+    /// The sensor's place, and its yaw's sine and cosine.
+    s: [Real; 2],
+    ys: Real,
+    yc: Real,
+    /// Columns less one (a power of two less one).
+    mask: i64,
+    /// The squared range.
+    r2: Real,
+    /// The sensor's height.
+    zs: Real,
+}
+
+impl Walker<'_> {
+    /// The world point `p` in the sensor's frame (as the other scans compute it).
+    #[inline(always)]
+    fn frame(&self, p: [Real; 2]) -> [Real; 2] {
+        let (dx, dy) = (p[0] - self.s[0], p[1] - self.s[1]);
+        [self.yc * dx + self.ys * dy, -self.ys * dx + self.yc * dy]
+    }
+
+    /// `p × d_j`: ≥ 0 if beam `j` is at or counter-clockwise of `p` (within half a turn).
+    #[inline(always)]
+    fn side(&self, p: [Real; 2], j: i64) -> Real {
+        let i = (j & self.mask) as usize;
+        p[0] * self.lidar.az_sin[i] - p[1] * self.lidar.az_cos[i]
+    }
+
+    /// The first column at or counter-clockwise of `p` (sensor frame), near its angle; a beam
+    /// exactly through `p` is recast.
+    #[inline(always)]
+    fn col(&self, p: [Real; 2], recast: &mut Vec<u32>) -> i64 {
+        let j = iceil(fast_atan2(p[1], p[0]) * self.lidar.inv_step);
+        let j = if self.side(p, j) < 0.0 {
+            j + 1
+        } else if self.side(p, j - 1) >= 0.0 {
+            j - 1
+        } else {
+            j
+        };
+        if self.side(p, j) == 0.0 {
+            recast.push((j & self.mask) as u32);
+        }
+        j
+    }
+
+    /// The first column of `j0..j1` at or counter-clockwise of `p` (`j1` if none); `p` and
+    /// the beams lie within half a turn of each other.
+    #[inline(always)]
+    fn split(&self, p: [Real; 2], j0: i64, j1: i64, recast: &mut Vec<u32>) -> i64 {
+        let first = self.side(p, j0);
+        if first >= 0.0 {
+            if first == 0.0 {
+                recast.push((j0 & self.mask) as u32);
+            }
+            return j0;
+        }
+        if self.side(p, j1 - 1) < 0.0 {
+            return j1;
+        }
+        // beam j0 is clockwise of p, beam j1 - 1 at or counter-clockwise of it
+        let m = if j1 - j0 <= 8 {
+            let mut m = j0 + 1;
+            for j in j0 + 1..j1 - 1 {
+                m += (self.side(p, j) < 0.0) as i64;
+            }
+            m
+        } else {
+            let n = self.mask + 1;
+            let mut m = iceil(fast_atan2(p[1], p[0]) * self.lidar.inv_step);
+            let mid = (j0 + j1) >> 1;
+            m += n * (mid - m + n / 2).div_euclid(n);
+            let m = m.clamp(j0 + 1, j1 - 1);
+            if self.side(p, m) < 0.0 {
+                m + 1
+            } else if self.side(p, m - 1) >= 0.0 {
+                m - 1
+            } else {
+                m
+            }
+        };
+        if self.side(p, m) == 0.0 {
+            recast.push((m & self.mask) as u32);
+        }
+        m
+    }
+
+    /// The beams `j0..j1` crossing edge `k` of triangle `t`, `tr` (the edge's ends `p`, `q` in
+    /// the sensor frame, clockwise end first as the sensor sees it): swept if a wall there
+    /// blocks them (counted in `swept`), else the window into the next triangle.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn edge(&self, tr: &Tri, t: usize, k: usize, p: [Real; 2], q: [Real; 2], j0: i64, j1: i64, ranges: &mut [Real], recast: &mut Vec<u32>, swept: &mut usize) -> Option<Window> {
+        if j0 >= j1 {
+            return None;
+        }
+        let (dp, dq) = (p[0] * p[0] + p[1] * p[1], q[0] * q[0] + q[1] * q[1]);
+        if dp > self.r2 && dq > self.r2 {
+            let e = sub2(q, p);
+            let cr = cross2(p, e);
+            if cr * cr > self.r2 * (e[0] * e[0] + e[1] * e[1]) {
+                return None; // the edge's line is out of range
+            }
+        }
+        let link = tr.link[k];
+        if link & LINK_WALL != 0 {
+            let w = self.mesh.tri_walls[t][k];
+            let [w0, w1] = self.mesh.edge_walls[w as usize];
+            let mut blocked = false;
+            for &wi in &self.mesh.wall_ids[w0 as usize..w1 as usize] {
+                let seg = &self.mesh.segments[wi as usize];
+                if self.zs > seg.height || !seg.faces(self.s) {
+                    continue;
+                }
+                blocked = true;
+                self.lidar.sweep_flat(self.frame(seg.a), self.frame(seg.b), j0, (j1 - j0) as usize, ranges);
+            }
+            if blocked {
+                let mut missed = false;
+                for j in j0..j1 {
+                    missed |= ranges[(j & self.mask) as usize] == Real::INFINITY;
+                }
+                if missed {
+                    for j in j0..j1 {
+                        let i = (j & self.mask) as usize;
+                        if ranges[i] == Real::INFINITY {
+                            recast.push(i as u32);
+                        }
+                    }
+                }
+                *swept += 1;
+                return None;
+            }
+        }
+        let nb = link & LINK_TRI;
+        (nb != 0).then_some(Window { pv: q, pu: p, j0: j0 as i32, j1: j1 as i32, t: nb, e: (link >> 29) & 3 })
+    }
+}
