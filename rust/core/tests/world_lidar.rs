@@ -203,6 +203,76 @@ fn indexed_scan_equals_the_full_scan_bit_for_bit() {
     }
 }
 
+/// The planar scan by walking a triangulation of the walls gives the full scan's ranges bit
+/// for bit: from random poses (some outside the walls, where it falls back to the index),
+/// with a moving wall, at two ranges; from poses whose beams pass exactly through corners
+/// (those beams are cast again against every wall); and a 16-channel scan (the index).
+#[test]
+fn mesh_scan_equals_the_full_scan_bit_for_bit() {
+    use shieldnav_core::sensors::ScanMesh;
+    use shieldnav_core::world::generate::{generate, GeneratorConfig, SiteKind};
+    use shieldnav_core::world::SegmentIndex;
+    let mut worlds: Vec<Vec<Segment>> = PRESET_NAMES.iter().map(|n| preset(n).unwrap().map.segments).collect();
+    for seed in 0..3 {
+        worlds.push(generate(seed, &GeneratorConfig::default()).unwrap().scenario.map.segments);
+        worlds.push(generate(seed, &GeneratorConfig { kind: SiteKind::Tunnel, ..Default::default() }).unwrap().scenario.map.segments);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let extra = [Segment::new([3.0, -0.3], [3.2, 0.4], 1.0)];
+    let (mut walked, mut recast, mut fell_back) = (0, 0, 0);
+    for walls in &worlds {
+        let mesh = ScanMesh::new(walls).unwrap();
+        let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        let (lo, hi) = {
+            let xs = walls.iter().flat_map(|s| [s.a[0], s.b[0]]);
+            let ys = walls.iter().flat_map(|s| [s.a[1], s.b[1]]);
+            ([xs.clone().fold(f64::INFINITY, f64::min), ys.clone().fold(f64::INFINITY, f64::min)], [xs.fold(f64::NEG_INFINITY, f64::max), ys.fold(f64::NEG_INFINITY, f64::max)])
+        };
+        // random poses, a few beyond the walls' box; poses on wall corners, yaw 0 and a
+        // quarter turn, so that beams run exactly along walls and through other corners
+        let mut poses: Vec<Pose2> = (0..30).map(|_| Pose2::new(rng.random_range(lo[0] - 3.0..hi[0] + 3.0), rng.random_range(lo[1] - 3.0..hi[1] + 3.0), rng.random_range(-3.2..3.2))).collect();
+        for s in walls.iter().step_by((walls.len() / 6).max(1)) {
+            poses.push(Pose2::new(s.a[0] + 0.25, s.a[1], 0.0));
+            poses.push(Pose2::new(s.a[0], s.a[1] + 0.25, std::f64::consts::FRAC_PI_2));
+            poses.push(Pose2::new(s.a[0], s.a[1], 0.0));
+        }
+        for (channels, max_range) in [(1, 20.0), (1, 6.0), (16, 20.0)] {
+            let mut lidar = Lidar::new(LidarConfig { channels, max_range, ..exact(channels, 1024) }).unwrap();
+            let (mut a, mut b) = (Scan::default(), Scan::default());
+            for &p in &poses {
+                lidar.scan_into(&[walls, &extra], p, 0.0, &mut rng, &mut a).unwrap();
+                lidar.scan_mesh_into(&mesh, &index, &extra, p, 0.0, &mut rng, &mut b).unwrap();
+                let (ba, bb): (Vec<u64>, Vec<u64>) = (a.ranges.iter().map(|r| r.to_bits()).collect(), b.ranges.iter().map(|r| r.to_bits()).collect());
+                if ba != bb {
+                    let diff: Vec<_> = (0..ba.len()).filter(|&i| ba[i] != bb[i]).map(|i| (i, a.ranges[i], b.ranges[i])).collect();
+                    panic!("pose {p:?} channels {channels} range {max_range}: {diff:?} {:?}", lidar.last_mesh_stats());
+                }
+                let st = lidar.last_mesh_stats();
+                assert!(st.fell_back || channels == 1, "a 16-channel scan walked: {st:?}");
+                walked += !st.fell_back as usize;
+                recast += st.beams_recast;
+                fell_back += (channels == 1 && st.fell_back) as usize;
+            }
+        }
+    }
+    // the walk ran, cast some beams again, and fell back from outside the triangulation
+    assert!(walked > 500 && recast > 0 && fell_back > 0, "walked {walked}, recast {recast}, fell back {fell_back}");
+}
+
+#[test]
+fn walls_that_cross_have_no_mesh() {
+    use shieldnav_core::sensors::ScanMesh;
+    let cross = [Segment::new([0.0, 0.0], [2.0, 2.0], 1.0), Segment::new([0.0, 2.0], [2.0, 0.0], 1.0)];
+    let e = ScanMesh::new(&cross).unwrap_err();
+    assert!(e.0.contains("cross"), "{e:?}");
+    let e = ScanMesh::new(&[Segment::new([1.0, 1.0], [1.0, 1.0], 1.0)]).unwrap_err();
+    assert!(e.0.contains("wall 0"), "{e:?}");
+    assert!(ScanMesh::new(&[]).is_err());
+    // walls meeting at their ends, or touching another's middle, triangulate
+    let t = [Segment::new([0.0, 0.0], [2.0, 0.0], 1.0), Segment::new([1.0, 0.0], [1.0, 1.0], 1.0), Segment::new([2.0, 0.0], [2.0, 2.0], 1.0)];
+    assert!(ScanMesh::new(&t).unwrap().triangles() > 0);
+}
+
 #[test]
 fn one_sided_grid_walls_give_the_two_sided_reference_ranges_in_free_space() {
     use shieldnav_core::world::generate::{generate, GeneratorConfig, SiteKind};

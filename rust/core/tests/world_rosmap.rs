@@ -296,6 +296,7 @@ fn malformed_files_name_file_and_field() {
 
 #[test]
 fn indexed_scan_equals_the_full_scan_on_real_maps() {
+    use shieldnav_core::sensors::ScanMesh;
     use shieldnav_core::world::SegmentIndex;
     let mut groups_occluded = 0;
     let mut maps = 0;
@@ -303,6 +304,9 @@ fn indexed_scan_equals_the_full_scan_on_real_maps() {
         maps += 1;
         let walls = &m.scenario.map.segments;
         let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        // every map's walls triangulate, and the walk gives the full scan's ranges too
+        let mesh = ScanMesh::new(walls).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        let mut c = Scan::default();
         let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range: 20.0, ..LidarConfig::default() }).unwrap();
         let (mut a, mut b) = (Scan::default(), Scan::default());
         let mut rng = ChaCha8Rng::seed_from_u64(0);
@@ -318,6 +322,12 @@ fn indexed_scan_equals_the_full_scan_on_real_maps() {
             }
             let st = lidar.last_indexed_stats();
             assert!(st.buckets_occluded > 0 && st.walls_swept < walls.len() / 2, "{name}: {st:?}");
+            lidar.scan_mesh_into(&mesh, &index, &[], p, 0.0, &mut rng, &mut c).unwrap();
+            for (i, (x, y)) in a.ranges.iter().zip(&c.ranges).enumerate() {
+                assert!(x == y || (x - y).abs() <= 1e-12 * x, "{name} pose {k} beam {i}: {x} vs walked {y}");
+            }
+            let ms = lidar.last_mesh_stats();
+            assert!(!ms.fell_back && ms.triangles > 0 && ms.walls_swept < walls.len() / 2, "{name}: {ms:?}");
             groups_occluded += st.groups_occluded;
             if k == 0 {
                 eprintln!("{name}: {} walls, {st:?}", walls.len());

@@ -9,7 +9,7 @@
 //! around them. A wall edge stops the beams of its window when the wall blocks them (faces
 //! the sensor, and stands higher than a planar ring); their ranges are the wall's exact f64
 //! hits (the hit of the whole wall, as [`Lidar::scan_into`] computes it), so the ranges equal
-//! the other scans' bit for bit. A beam that passes exactly through a corner of the
+//! the other scans' bit for bit. A beam that passes within a nanometre of a corner of the
 //! triangulation, or that the wall's own hit test misses, is cast again against every wall.
 
 use std::collections::HashMap;
@@ -404,6 +404,11 @@ impl Lidar {
     }
 }
 
+/// How near (m) a beam passes a corner of the triangulation to be cast again against every
+/// wall: far above the rounding of any hit test (about 1e-16 of the distances involved), far
+/// below the gap between beams.
+const NEAR: Real = 1e-9;
+
 /// The next corner of a triangle.
 const NEXT: [usize; 3] = [1, 2, 0];
 
@@ -438,8 +443,18 @@ impl Walker<'_> {
         p[0] * self.lidar.az_sin[i] - p[1] * self.lidar.az_cos[i]
     }
 
-    /// The first column at or counter-clockwise of `p` (sensor frame), near its angle; a beam
-    /// exactly through `p` is recast.
+    /// Marks for recasting beams `j - 1` and `j` if they pass within [`NEAR`] of `p`: there
+    /// the other scans' hit tests may round a wall's end point either way.
+    #[inline(always)]
+    fn near(&self, p: [Real; 2], j: i64, recast: &mut Vec<u32>) {
+        for j in [j - 1, j] {
+            if self.side(p, j).abs() <= NEAR {
+                recast.push((j & self.mask) as u32);
+            }
+        }
+    }
+
+    /// The first column at or counter-clockwise of `p` (sensor frame), near its angle.
     #[inline(always)]
     fn col(&self, p: [Real; 2], recast: &mut Vec<u32>) -> i64 {
         let j = iceil(fast_atan2(p[1], p[0]) * self.lidar.inv_step);
@@ -450,9 +465,7 @@ impl Walker<'_> {
         } else {
             j
         };
-        if self.side(p, j) == 0.0 {
-            recast.push((j & self.mask) as u32);
-        }
+        self.near(p, j, recast);
         j
     }
 
@@ -462,12 +475,16 @@ impl Walker<'_> {
     fn split(&self, p: [Real; 2], j0: i64, j1: i64, recast: &mut Vec<u32>) -> i64 {
         let first = self.side(p, j0);
         if first >= 0.0 {
-            if first == 0.0 {
+            if first <= NEAR {
                 recast.push((j0 & self.mask) as u32);
             }
             return j0;
         }
-        if self.side(p, j1 - 1) < 0.0 {
+        let last = self.side(p, j1 - 1);
+        if last < 0.0 {
+            if last >= -NEAR {
+                recast.push(((j1 - 1) & self.mask) as u32);
+            }
             return j1;
         }
         // beam j0 is clockwise of p, beam j1 - 1 at or counter-clockwise of it
@@ -491,9 +508,7 @@ impl Walker<'_> {
                 m
             }
         };
-        if self.side(p, m) == 0.0 {
-            recast.push((m & self.mask) as u32);
-        }
+        self.near(p, m, recast);
         m
     }
 

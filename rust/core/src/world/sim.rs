@@ -11,6 +11,7 @@
 //! ```
 
 use std::path::Path;
+use std::time::Instant;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -24,7 +25,7 @@ use super::scenario::Scenario;
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::robot::{footprint_segment_distance, ContactReport, PhysicsScene, RobotShape, Tracker, TrackerConfig};
-use crate::sensors::{Lidar, LidarConfig, Odometry, Scan};
+use crate::sensors::{Lidar, LidarConfig, Odometry, Scan, ScanMesh};
 
 /// Distance (m) within which [`World::clearance`] first searches the wall index.
 pub const CLEARANCE_SEARCH: Real = 2.0;
@@ -42,6 +43,38 @@ pub const FREE_STEP_MARGIN: Real = 0.05;
 /// walls) 2.5–3.2 µs sweeping all against 2.6–4.8 µs indexed; the 200-wall world 14.1 against
 /// 9.7 µs (walls two-sided), 8.8 against 8.4 µs (furniture solid).
 pub const SCAN_ALL_WALLS_MAX: usize = 128;
+
+/// Bigger worlds' planar scans go through the bucket index or walk a triangulation of the
+/// walls ([`Lidar::scan_mesh_into`]), the same ranges either way, whichever has lately been
+/// faster on this machine: each scan's time is kept as a running mean per way, the faster
+/// way taken, and the other tried every this many scans. (The walk reads only what the
+/// sensor sees, and wins where it sees far across clutter; the index wins where most walls
+/// in range are near.)
+pub const SCAN_PROBE_EVERY: u64 = 32;
+
+/// The running mean time of each way to scan a big world (see [`SCAN_PROBE_EVERY`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct ScanChoice {
+    /// Nanoseconds per scan, through the index and by the walk (0: not yet timed).
+    ns: [f64; 2],
+    scans: u64,
+}
+
+impl ScanChoice {
+    /// Whether the next scan walks the triangulation.
+    fn walk(&self) -> bool {
+        match self.scans {
+            0 | 1 => self.scans == 1,
+            k => (self.ns[1] < self.ns[0]) != k.is_multiple_of(SCAN_PROBE_EVERY),
+        }
+    }
+
+    fn record(&mut self, walked: bool, ns: f64) {
+        let m = &mut self.ns[walked as usize];
+        *m = if *m == 0.0 { ns } else { 0.75 * *m + 0.25 * ns };
+        self.scans += 1;
+    }
+}
 
 /// Everything about a world that is not the scenario.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,6 +131,9 @@ pub struct World {
     scan: Scan,
     scan_body_pose: Pose2,
     index: SegmentIndex,
+    /// The walls triangulated for planar scans of big worlds (see [`SCAN_PROBE_EVERY`]).
+    mesh: Option<ScanMesh>,
+    choice: ScanChoice,
     near: Vec<Segment>,
     /// Squared distances from the robot's centre to `near`.
     near_c2: Vec<Real>,
@@ -126,6 +162,9 @@ impl World {
         let physics = PhysicsScene::new(config.robot, &scenario.map.segments, &scenario.obstacles, scenario.start, 0.0)?;
         let odometry = Odometry::new(scenario.odometry.clone(), scenario.start, 0.0)?;
         let index = SegmentIndex::new(scenario.map.segments.clone(), 2.0)?;
+        // (walls that cross each other, or none: no triangulation, the index alone)
+        let big_planar = scenario.map.segments.len() > SCAN_ALL_WALLS_MAX && config.lidar.channels == 1;
+        let mesh = if big_planar { ScanMesh::new(&scenario.map.segments).ok() } else { None };
         let mut w = Self {
             scenario,
             config,
@@ -139,6 +178,8 @@ impl World {
             scan: Scan::default(),
             scan_body_pose: Pose2::default(),
             index,
+            mesh,
+            choice: ScanChoice::default(),
             near: Vec::new(),
             near_c2: Vec::new(),
             clearance_kept: Vec::new(),
@@ -182,6 +223,15 @@ impl World {
         // the same ranges either way (tested); sweeping every wall is faster on small worlds
         if self.index.segments().len() <= SCAN_ALL_WALLS_MAX {
             self.lidar.scan_into(&[self.index.segments(), &self.moving], pose, self.time, &mut self.rng, &mut self.scan)?;
+        } else if let Some(mesh) = &self.mesh {
+            let walk = self.choice.walk();
+            let t = Instant::now();
+            if walk {
+                self.lidar.scan_mesh_into(mesh, &self.index, &self.moving, pose, self.time, &mut self.rng, &mut self.scan)?;
+            } else {
+                self.lidar.scan_indexed_into(&self.index, &self.moving, pose, self.time, &mut self.rng, &mut self.scan)?;
+            }
+            self.choice.record(walk, t.elapsed().as_nanos() as f64);
         } else {
             self.lidar.scan_indexed_into(&self.index, &self.moving, pose, self.time, &mut self.rng, &mut self.scan)?;
         }
