@@ -7,7 +7,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shieldnav_core::sensors::{Lidar, LidarConfig, Scan};
+use shieldnav_core::sensors::{Lidar, LidarConfig, Scan, ScanMesh};
 use shieldnav_core::world::{load_ros_map, preset, Pose2, RosMapOptions, Segment, SegmentIndex};
 
 #[path = "common.rs"]
@@ -68,6 +68,17 @@ fn bench(c: &mut Criterion) {
                 black_box(&scan.ranges);
             })
         });
+        // (the boxes of this world overlap, and walls that cross have no triangulation)
+        if let (1, Ok(mesh)) = (cfg.channels, ScanMesh::new(&walls)) {
+            let mut k = 0;
+            g.bench_function(format!("{name}_walk"), |b| {
+                b.iter(|| {
+                    k = (k + 1) % poses.len();
+                    lidar.scan_mesh_into(black_box(&mesh), &index, &[], poses[k], 0.0, &mut rng, &mut scan).unwrap();
+                    black_box(&scan.ranges);
+                })
+            });
+        }
         let mut k = 0;
         g.bench_function(name, |b| {
             b.iter(|| {
@@ -122,6 +133,16 @@ fn bench(c: &mut Criterion) {
                 b.iter(|| {
                     k = (k + 1) % POSES;
                     lidar.scan_indexed_into(black_box(&index), &[], poses[k], 0.0, &mut rng, &mut scan).unwrap();
+                    black_box(&scan.ranges);
+                })
+            });
+            // the same scans by walking a triangulation of the walls
+            let mesh = ScanMesh::new(&m.scenario.map.segments).unwrap();
+            let mut k = 0;
+            g.bench_function(format!("planar_1024_{name}_{}walls_range{max_range}_walk", m.scenario.map.segments.len()), |b| {
+                b.iter(|| {
+                    k = (k + 1) % POSES;
+                    lidar.scan_mesh_into(black_box(&mesh), &index, &[], poses[k], 0.0, &mut rng, &mut scan).unwrap();
                     black_box(&scan.ranges);
                 })
             });

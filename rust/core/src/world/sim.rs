@@ -38,7 +38,8 @@ pub const CLEARANCE_BUDGET: Real = 0.25;
 pub const FREE_STEP_MARGIN: Real = 0.05;
 
 /// Worlds of at most this many walls are scanned by sweeping every wall ([`Lidar::scan_into`]),
-/// bigger ones through their bucket index ([`Lidar::scan_indexed_into`]); the ranges are the
+/// bigger ones through their bucket index ([`Lidar::scan_indexed_into`]) or, planar scans, by
+/// walking a triangulation of their walls (see [`SCAN_PROBE_EVERY`]); the ranges are the
 /// same. Measured from a robot pacing near the start: the presets and generated sites (16–96
 /// walls) 2.5–3.2 µs sweeping all against 2.6–4.8 µs indexed; the 200-wall world 14.1 against
 /// 9.7 µs (walls two-sided), 8.8 against 8.4 µs (furniture solid).
