@@ -130,18 +130,18 @@ fn main() {
         let mesh = if args.mesh {
             let t = Instant::now();
             let mesh = ScanMesh::new(&m.scenario.map.segments).unwrap_or_else(|e| fail(format!("{name}: no mesh: {e:?}")));
-            eprintln!("{name}: mesh of {} triangles in {:.1} ms", mesh.triangles(), t.elapsed().as_secs_f64() * 1e3);
+            eprintln!("{name}: mesh of {} cells in {:.1} ms", mesh.cells(), t.elapsed().as_secs_f64() * 1e3);
             let (mut a, mut b) = (Scan::default(), Scan::default());
             let (mut bad, mut tri, mut rec, mut sw) = (0, 0, 0, 0);
             for &p in &pool {
                 lidar.scan_indexed_into(&index, &[], p, 0.0, &mut rng, &mut a).unwrap();
                 lidar.scan_mesh_into(&mesh, &index, &[], p, 0.0, &mut rng, &mut b).unwrap();
                 bad += a.ranges.iter().zip(&b.ranges).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
-                tri += lidar.last_mesh_stats().triangles;
+                tri += lidar.last_mesh_stats().cells;
                 rec += lidar.last_mesh_stats().beams_recast;
                 sw += lidar.last_mesh_stats().walls_swept;
             }
-            eprintln!("{name}: {bad} beams differ over {} scans; {:.0} triangles, {:.0} walls swept, {rec} recast", pool.len(), tri as f64 / pool.len() as f64, sw as f64 / pool.len() as f64);
+            eprintln!("{name}: {bad} beams differ over {} scans; {:.0} cells entered, {:.0} walls swept, {rec} recast", pool.len(), tri as f64 / pool.len() as f64, sw as f64 / pool.len() as f64);
             Some(mesh)
         } else {
             None

@@ -270,7 +270,7 @@ fn walls_that_cross_have_no_mesh() {
     assert!(ScanMesh::new(&[]).is_err());
     // walls meeting at their ends, or touching another's middle, triangulate
     let t = [Segment::new([0.0, 0.0], [2.0, 0.0], 1.0), Segment::new([1.0, 0.0], [1.0, 1.0], 1.0), Segment::new([2.0, 0.0], [2.0, 2.0], 1.0)];
-    assert!(ScanMesh::new(&t).unwrap().triangles() > 0);
+    assert!(ScanMesh::new(&t).unwrap().cells() > 0);
 }
 
 #[test]

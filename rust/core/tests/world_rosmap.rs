@@ -327,7 +327,7 @@ fn indexed_scan_equals_the_full_scan_on_real_maps() {
                 assert!(x == y || (x - y).abs() <= 1e-12 * x, "{name} pose {k} beam {i}: {x} vs walked {y}");
             }
             let ms = lidar.last_mesh_stats();
-            assert!(!ms.fell_back && ms.triangles > 0 && ms.walls_swept < walls.len() / 2, "{name}: {ms:?}");
+            assert!(!ms.fell_back && ms.cells > 0 && ms.walls_swept < walls.len() / 2, "{name}: {ms:?}");
             groups_occluded += st.groups_occluded;
             if k == 0 {
                 eprintln!("{name}: {} walls, {st:?}", walls.len());

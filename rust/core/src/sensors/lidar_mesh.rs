@@ -6,7 +6,8 @@
 //! can see is read: no wall behind another is ever looked at.
 //!
 //! The walls are the constraints of a constrained Delaunay triangulation (`spade`), in a box
-//! around them. A wall edge stops the beams of its window when the wall blocks them (faces
+//! around them; triangles are merged into strictly convex cells of up to ten corners across
+//! the edges that are no wall (longest first), so that a beam crosses fewer edges. A wall edge stops the beams of its window when the wall blocks them (faces
 //! the sensor, and stands higher than a planar ring); their ranges are the wall's exact f64
 //! hits (the hit of the whole wall, as [`Lidar::scan_into`] computes it), so the ranges equal
 //! the other scans' bit for bit. A beam that passes within a nanometre of a corner of the
@@ -25,23 +26,16 @@ use crate::world::{cross2, sub2, Pose2, Segment};
 /// "None" in the triangle tables.
 const NONE: u32 = u32::MAX;
 
-/// One triangle, one cache line: its corners counter-clockwise, and per edge `k` (from corner
-/// `k` to `k + 1`) a link: the triangle across it (0: outside the box) in the low 29 bits,
-/// that edge's place among the neighbour's edges in the next two, and whether walls lie on
-/// it in the top bit (then [`ScanMesh::tri_walls`] says which).
-#[derive(Debug, Clone, Copy)]
-#[repr(C, align(64))]
-struct Tri {
-    p: [[Real; 2]; 3],
-    link: [u32; 3],
-}
-
-/// The triangle of a link.
-const LINK_TRI: u32 = (1 << 29) - 1;
+/// Most corners of a cell: triangles merge into convex cells up to this size.
+const MAX_CORNERS: usize = 10;
+/// The cell of a link (see [`ScanMesh::link`]).
+const LINK_CELL: u32 = (1 << 27) - 1;
+/// Where a link's back index starts.
+const LINK_BACK: u32 = 27;
 /// A link's wall bit.
 const LINK_WALL: u32 = 1 << 31;
 
-/// Beams `j0..j1` (columns, unwrapped) entering triangle `t` through its edge `e`, whose ends
+/// Beams `j0..j1` (columns, unwrapped) entering cell `t` through its edge `e`, whose ends
 /// (sensor frame) are `pv` (corner `e`, counter-clockwise as the sensor sees it) and `pu`
 /// (corner `e + 1`).
 #[derive(Debug, Clone, Copy)]
@@ -58,19 +52,26 @@ struct Window {
 #[derive(Debug, Clone, PartialEq)]
 pub struct NoMesh(pub String);
 
-/// A triangulation of a world's walls for the planar scan (see the module's doc).
+/// A triangulation of a world's walls for the planar scan (see the module's doc), its
+/// triangles merged into convex cells where no wall parts them.
 #[derive(Debug, Clone)]
 pub struct ScanMesh {
     segments: Vec<Segment>,
-    /// Index 0 is the outside of the box; the others in the order of their middles along a
+    /// Cell `c`'s corners (counter-clockwise) are `corner[start[c]..start[c + 1]]`; cell 0 is
+    /// the outside of the box (no corners); the others in the order of their middles along a
     /// Z curve, so that neighbours are mostly near in memory.
-    tris: Vec<Tri>,
-    /// Per triangle and edge, the walls on it (an index into `edge_walls`), or [`NONE`].
-    tri_walls: Vec<[u32; 3]>,
+    start: Vec<u32>,
+    corner: Vec<[Real; 2]>,
+    /// Per corner `i` of a cell, for its edge to corner `i + 1`: the cell across it (0: the
+    /// outside) in the low 27 bits, that edge's place among the neighbour's in the next four,
+    /// and whether walls lie on it in the top bit (then `edge_wall` says which).
+    link: Vec<u32>,
+    /// Per corner edge, the walls on it (an index into `edge_walls`), or [`NONE`].
+    edge_wall: Vec<u32>,
     /// Per wall edge, the range of its walls in `wall_ids`.
     edge_walls: Vec<[u32; 2]>,
     wall_ids: Vec<u32>,
-    /// A triangle at the centre of each cell of a grid over the walls' box.
+    /// A cell at the centre of each cell of a grid over the walls' box.
     grid: Vec<u32>,
     grid_origin: [Real; 2],
     grid_cell: Real,
@@ -80,8 +81,8 @@ pub struct ScanMesh {
 /// What the last [`Lidar::scan_mesh_into`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct MeshScanStats {
-    /// Triangles entered (once per window).
-    pub triangles: usize,
+    /// Cells entered (once per window).
+    pub cells: usize,
     /// Wall edges whose beams were swept.
     pub walls_swept: usize,
     /// Beams cast again against every wall.
@@ -146,7 +147,7 @@ impl ScanMesh {
         let verts: Vec<[Real; 2]> = cdt.vertices().map(|v| [v.position().x, v.position().y]).collect();
         // the walls on each constraint edge: follow each wall from its start along constraint
         // edges through the vertices lying on it
-        let mut on_edge: HashMap<usize, Vec<u32>> = HashMap::new();
+        let mut on_edge: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
         for (k, &(a, b)) in ends.iter().enumerate() {
             let (pa, pb) = (verts[a as usize], verts[b as usize]);
             let ab = sub2(pb, pa);
@@ -168,7 +169,8 @@ impl ScanMesh {
                 let Some(e) = next else {
                     return Err(NoMesh(format!("wall {k} not found in the triangulation")));
                 };
-                on_edge.entry(e.as_undirected().fix().index()).or_default().push(k as u32);
+                let (x, y) = (cur as u32, e.to().index() as u32);
+                on_edge.entry((x.min(y), x.max(y))).or_default().push(k as u32);
                 cur = e.to().index();
                 steps += 1;
                 if steps > n_pts {
@@ -178,8 +180,8 @@ impl ScanMesh {
         }
         let mut edge_walls = Vec::with_capacity(on_edge.len());
         let mut wall_ids = Vec::with_capacity(segments.len());
-        let mut edge_slot: HashMap<usize, u32> = HashMap::with_capacity(on_edge.len());
-        let mut keys: Vec<usize> = on_edge.keys().copied().collect();
+        let mut edge_slot: HashMap<(u32, u32), u32> = HashMap::with_capacity(on_edge.len());
+        let mut keys: Vec<(u32, u32)> = on_edge.keys().copied().collect();
         keys.sort_unstable();
         for e in keys {
             let ws = &on_edge[&e];
@@ -187,21 +189,66 @@ impl ScanMesh {
             edge_walls.push([wall_ids.len() as u32, (wall_ids.len() + ws.len()) as u32]);
             wall_ids.extend_from_slice(ws);
         }
-        // triangles: corners, neighbours, walls (spade's face indices, 0 the outside)
+        let slot = |x: u32, y: u32| edge_slot.get(&(x.min(y), x.max(y))).copied().unwrap_or(NONE);
+        // cells: spade's triangles (face indices, 0 the outside), then merged across edges
+        // that are no wall while the union stays strictly convex, longest edges first
         let nf = cdt.num_all_faces();
-        let (mut v, mut nbr, mut walls) = (vec![[0u32; 3]; nf], vec![[0u32; 3]; nf], vec![[NONE; 3]; nf]);
+        let mut polys: Vec<Vec<u32>> = vec![Vec::new(); nf];
+        let mut faces: Vec<Vec<u32>> = vec![Vec::new(); nf];
+        let mut owner: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * nf);
         for f in cdt.inner_faces() {
-            let es = f.adjacent_edges();
             let i = f.fix().index();
+            polys[i] = f.adjacent_edges().iter().map(|e| e.from().index() as u32).collect();
+            faces[i].push(i as u32);
             for k in 0..3 {
-                v[i][k] = es[k].from().index() as u32;
-                nbr[i][k] = es[k].rev().face().fix().index() as u32;
-                walls[i][k] = edge_slot.get(&es[k].as_undirected().fix().index()).copied().unwrap_or(NONE);
+                owner.insert((polys[i][k], polys[i][(k + 1) % 3]), i as u32);
             }
         }
-        if nf as u64 > LINK_TRI as u64 {
-            return Err(NoMesh(format!("{nf} triangles, too many")));
+        let mut diagonals: Vec<(Real, u32, u32)> = owner
+            .keys()
+            .filter(|&&(x, y)| x < y && owner.contains_key(&(y, x)) && slot(x, y) == NONE)
+            .map(|&(x, y)| {
+                let d = sub2(verts[y as usize], verts[x as usize]);
+                (d[0] * d[0] + d[1] * d[1], x, y)
+            })
+            .collect();
+        diagonals.sort_unstable_by(|p, q| q.0.total_cmp(&p.0).then((p.1, p.2).cmp(&(q.1, q.2))));
+        let orient = |p: u32, q: u32, r: u32| {
+            let (p, q, r) = (verts[p as usize], verts[q as usize], verts[r as usize]);
+            let (u, w) = (sub2(q, p), sub2(r, q));
+            // strictly convex, with a margin far above rounding
+            cross2(u, w) > 1e-9 * (u[0].abs() + u[1].abs()) * (w[0].abs() + w[1].abs())
+        };
+        for &(_, x, y) in &diagonals {
+            let (Some(&p1), Some(&p2)) = (owner.get(&(x, y)), owner.get(&(y, x))) else { continue };
+            if p1 == p2 || polys[p1 as usize].len() + polys[p2 as usize].len() - 2 > MAX_CORNERS {
+                continue;
+            }
+            // p1 from y round to x (its edge x → y closing it), p2 from x round to y
+            let rot = |poly: &[u32], from: u32| {
+                let i = poly.iter().position(|&c| c == from).expect("a corner of its cell");
+                let mut r = poly.to_vec();
+                r.rotate_left(i);
+                r
+            };
+            let (r1, r2) = (rot(&polys[p1 as usize], y), rot(&polys[p2 as usize], x));
+            let (n1, n2) = (r1.len(), r2.len());
+            if !(orient(r1[n1 - 2], x, r2[1]) && orient(r2[n2 - 2], y, r1[1])) {
+                continue;
+            }
+            let mut merged = r1;
+            merged.extend_from_slice(&r2[1..n2 - 1]);
+            owner.remove(&(x, y));
+            owner.remove(&(y, x));
+            for k in 0..merged.len() {
+                owner.insert((merged[k], merged[(k + 1) % merged.len()]), p1);
+            }
+            polys[p1 as usize] = merged;
+            polys[p2 as usize].clear();
+            let moved = std::mem::take(&mut faces[p2 as usize]);
+            faces[p1 as usize].extend(moved);
         }
+        let mut cell_of_face = vec![0u32; nf];
         // renumbered along a Z curve of their middles (0 stays the outside)
         let morton = |x: Real, y: Real| {
             let q = |t: Real| (t.clamp(0.0, 1.0) * 65535.0) as u64;
@@ -214,32 +261,39 @@ impl ScanMesh {
             spread(q((x - lo[0]) / (hi[0] - lo[0]).max(1e-9))) | spread(q((y - lo[1]) / (hi[1] - lo[1]).max(1e-9))) << 1
         };
         let mut order: Vec<(u64, usize)> = (1..nf)
+            .filter(|&i| !polys[i].is_empty())
             .map(|i| {
-                let c = v[i].map(|k| verts[k as usize]);
-                (morton((c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0), i)
+                let k = polys[i].len() as Real;
+                let (sx, sy) = polys[i].iter().fold((0.0, 0.0), |(sx, sy), &c| (sx + verts[c as usize][0], sy + verts[c as usize][1]));
+                (morton(sx / k, sy / k), i)
             })
             .collect();
         order.sort_unstable();
+        if order.len() as u64 >= LINK_CELL as u64 {
+            return Err(NoMesh(format!("{} cells, too many", order.len())));
+        }
         let mut new_of = vec![0u32; nf];
         for (k, &(_, i)) in order.iter().enumerate() {
             new_of[i] = k as u32 + 1;
-        }
-        let mut tris = vec![Tri { p: [[0.0; 2]; 3], link: [0; 3] }; nf];
-        let mut tri_walls = vec![[NONE; 3]; nf];
-        for i in 1..nf {
-            let t = new_of[i] as usize;
-            tri_walls[t] = walls[i];
-            for k in 0..3 {
-                tris[t].p[k] = verts[v[i][k] as usize];
-                let n = nbr[i][k] as usize;
-                let back = if n == 0 {
-                    0
-                } else {
-                    let (a, b) = (v[i][k], v[i][(k + 1) % 3]);
-                    (0..3).find(|&m| v[n][m] == b && v[n][(m + 1) % 3] == a).ok_or_else(|| NoMesh("inconsistent triangulation".into()))? as u32
-                };
-                tris[t].link[k] = new_of[n] | back << 29 | if walls[i][k] != NONE { LINK_WALL } else { 0 };
+            for &f in &faces[i] {
+                cell_of_face[f as usize] = k as u32 + 1;
             }
+        }
+        let (mut start, mut corner, mut link, mut edge_wall) = (vec![0u32, 0], Vec::new(), Vec::new(), Vec::new());
+        for &(_, i) in &order {
+            let poly = &polys[i];
+            for k in 0..poly.len() {
+                let (x, y) = (poly[k], poly[(k + 1) % poly.len()]);
+                corner.push(verts[x as usize]);
+                let (nb, back) = match owner.get(&(y, x)) {
+                    Some(&n) => (new_of[n as usize], polys[n as usize].iter().position(|&c| c == y).expect("a corner of its cell") as u32),
+                    None => (0, 0),
+                };
+                let w = slot(x, y);
+                edge_wall.push(w);
+                link.push(nb | back << LINK_BACK | if w != NONE { LINK_WALL } else { 0 });
+            }
+            start.push(corner.len() as u32);
         }
         // the locator grid
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
@@ -258,10 +312,10 @@ impl ScanMesh {
                     PositionInTriangulation::OnVertex(v) => cdt.vertex(v).out_edges().find_map(|e| e.face().as_inner()).map_or(0, |f| f.fix().index()),
                     PositionInTriangulation::NoTriangulation => 0,
                 };
-                grid.push(new_of[t.max(1)]);
+                grid.push(cell_of_face[t].max(1));
             }
         }
-        Ok(Self { segments: segments.to_vec(), tris, tri_walls, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims })
+        Ok(Self { segments: segments.to_vec(), start, corner, link, edge_wall, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims })
     }
 
     /// The walls.
@@ -269,29 +323,36 @@ impl ScanMesh {
         &self.segments
     }
 
-    /// Triangles (for reports).
-    pub fn triangles(&self) -> usize {
-        self.tris.len() - 1
+    /// Convex cells (triangles and merged ones).
+    pub fn cells(&self) -> usize {
+        self.start.len() - 2
     }
 
-    /// The triangle holding `s` strictly inside, found by walking from the grid's; `None` on
-    /// an edge's line or outside the box.
+    /// The corners of cell `c` (counter-clockwise), and the index of its first.
+    #[inline(always)]
+    fn corners(&self, c: usize) -> (&[[Real; 2]], usize) {
+        let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
+        (&self.corner[a..b], a)
+    }
+
+    /// The cell holding `s` strictly inside, found by walking from the grid's; `None` on an
+    /// edge's line or outside the box.
     fn locate(&self, s: [Real; 2]) -> Option<usize> {
         let (nx, ny) = self.grid_dims;
         let gi = (((s[0] - self.grid_origin[0]) / self.grid_cell).floor().max(0.0) as usize).min(nx - 1);
         let gj = (((s[1] - self.grid_origin[1]) / self.grid_cell).floor().max(0.0) as usize).min(ny - 1);
         let mut t = self.grid[gj * nx + gi] as usize;
         for _ in 0..1 << 16 {
-            let tr = &self.tris[t];
+            let (cs, at) = self.corners(t);
             let mut next = None;
-            for k in 0..3 {
-                let (a, b) = (tr.p[k], tr.p[(k + 1) % 3]);
+            for k in 0..cs.len() {
+                let (a, b) = (cs[k], cs[(k + 1) % cs.len()]);
                 let o = cross2(sub2(b, a), sub2(s, a));
                 if o == 0.0 {
                     return None;
                 }
                 if o < 0.0 && next.is_none() {
-                    next = Some((tr.link[k] & LINK_TRI) as usize);
+                    next = Some((self.link[at + k] & LINK_CELL) as usize);
                 }
             }
             match next {
@@ -351,40 +412,60 @@ impl Lidar {
         let stack = &mut sc.stack;
         stack.clear();
         let stats = &mut sc.stats;
-        let tr = &mesh.tris[t0];
-        let p: [[Real; 2]; 3] = std::array::from_fn(|k| w.frame(tr.p[k]));
-        let c0 = w.col(p[0], recast);
-        let mut c1 = w.col(p[1], recast);
-        c1 += n * (c1 < c0) as i64;
-        let mut c2 = w.col(p[2], recast);
-        c2 += n * (c2 < c1) as i64;
-        let windows: [(i64, i64); 3] = [(c0, c1), (c1, c2), (c2, c0 + n)];
-        for (k, &(j0, j1)) in windows.iter().enumerate() {
-            if let Some(next) = w.edge(tr, t0, k, p[k], p[(k + 1) % 3], j0, j1, ranges, recast, &mut stats.walls_swept) {
+        // the start cell: its corners' columns, in turn counter-clockwise round the sensor
+        let (cs, at) = mesh.corners(t0);
+        let k = cs.len();
+        let mut p = [[0.0; 2]; MAX_CORNERS + 1];
+        let mut cols = [0i64; MAX_CORNERS + 1];
+        for i in 0..k {
+            p[i] = w.frame(cs[i]);
+            cols[i] = w.col(p[i], recast);
+            if i > 0 {
+                let behind = cols[i - 1] - cols[i];
+                if behind > 0 {
+                    cols[i] += n * ((behind + n - 1) / n);
+                }
+            }
+        }
+        (p[k], cols[k]) = (p[0], cols[0] + n);
+        for i in 0..k {
+            if let Some(next) = w.edge(at + i, p[i], p[i + 1], cols[i], cols[i + 1], ranges, recast, &mut stats.walls_swept) {
                 stack.push(next);
             }
         }
         let mut cur = stack.pop();
         while let Some(win) = cur {
-            stats.triangles += 1;
-            let tr = &mesh.tris[win.t as usize];
+            stats.cells += 1;
+            let (cs, at) = mesh.corners(win.t as usize);
+            let k = cs.len();
             let e = win.e as usize;
-            let (k1, k2) = (NEXT[e], NEXT[NEXT[e]]);
-            // the third corner splits the window
-            let pw = w.frame(tr.p[k2]);
-            let (j0, j1) = (win.j0 as i64, win.j1 as i64);
-            let m = w.split(pw, j0, j1, recast);
-            let left = w.edge(tr, win.t as usize, k1, win.pu, pw, j0, m, ranges, recast, &mut stats.walls_swept);
-            let right = w.edge(tr, win.t as usize, k2, pw, win.pv, m, j1, ranges, recast, &mut stats.walls_swept);
-            // on through one side at once, the other later
-            cur = match (left, right) {
-                (Some(l), Some(r)) => {
-                    stack.push(r);
-                    Some(l)
+            // out through the edges from corner e + 1 round to corner e: each takes the beams
+            // up to (clockwise of) its far corner
+            let (mut lo, j1) = (win.j0 as i64, win.j1 as i64);
+            let mut from = win.pu;
+            let mut i = if e + 1 == k { 0 } else { e + 1 };
+            let mut next: Option<Window> = None;
+            loop {
+                let i1 = if i + 1 == k { 0 } else { i + 1 };
+                let (to, m) = if i1 == e {
+                    (win.pv, j1)
+                } else {
+                    let to = w.frame(cs[i1]);
+                    (to, w.split(to, lo, j1, recast))
+                };
+                if let Some(out) = w.edge(at + i, from, to, lo, m, ranges, recast, &mut stats.walls_swept) {
+                    match next {
+                        None => next = Some(out),
+                        Some(_) => stack.push(out),
+                    }
                 }
-                (Some(x), None) | (None, Some(x)) => Some(x),
-                (None, None) => stack.pop(),
-            };
+                if m >= j1 {
+                    break;
+                }
+                (lo, from, i) = (m, to, i1);
+            }
+            // on through one side at once, the others later
+            cur = next.or_else(|| stack.pop());
         }
         // beams through a corner, or missed by the wall they crossed: against every wall
         recast.sort_unstable();
@@ -408,9 +489,6 @@ impl Lidar {
 /// wall: far above the rounding of any hit test (about 1e-16 of the distances involved), far
 /// below the gap between beams.
 const NEAR: Real = 1e-9;
-
-/// The next corner of a triangle.
-const NEXT: [usize; 3] = [1, 2, 0];
 
 /// One scan's walk (see [`Lidar::walk`]).
 struct Walker<'a> {
@@ -512,12 +590,12 @@ impl Walker<'_> {
         m
     }
 
-    /// The beams `j0..j1` crossing edge `k` of triangle `t`, `tr` (the edge's ends `p`, `q` in
-    /// the sensor frame, clockwise end first as the sensor sees it): swept if a wall there
-    /// blocks them (counted in `swept`), else the window into the next triangle.
+    /// The beams `j0..j1` crossing the corner edge `g` (see [`ScanMesh::link`]; its ends `p`,
+    /// `q` in the sensor frame, clockwise end first as the sensor sees it): swept if a wall
+    /// there blocks them (counted in `swept`), else the window into the next cell.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn edge(&self, tr: &Tri, t: usize, k: usize, p: [Real; 2], q: [Real; 2], j0: i64, j1: i64, ranges: &mut [Real], recast: &mut Vec<u32>, swept: &mut usize) -> Option<Window> {
+    fn edge(&self, g: usize, p: [Real; 2], q: [Real; 2], j0: i64, j1: i64, ranges: &mut [Real], recast: &mut Vec<u32>, swept: &mut usize) -> Option<Window> {
         if j0 >= j1 {
             return None;
         }
@@ -529,9 +607,9 @@ impl Walker<'_> {
                 return None; // the edge's line is out of range
             }
         }
-        let link = tr.link[k];
+        let link = self.mesh.link[g];
         if link & LINK_WALL != 0 {
-            let w = self.mesh.tri_walls[t][k];
+            let w = self.mesh.edge_wall[g];
             let [w0, w1] = self.mesh.edge_walls[w as usize];
             let mut blocked = false;
             for &wi in &self.mesh.wall_ids[w0 as usize..w1 as usize] {
@@ -559,7 +637,48 @@ impl Walker<'_> {
                 return None;
             }
         }
-        let nb = link & LINK_TRI;
-        (nb != 0).then_some(Window { pv: q, pu: p, j0: j0 as i32, j1: j1 as i32, t: nb, e: (link >> 29) & 3 })
+        let nb = link & LINK_CELL;
+        (nb != 0).then_some(Window { pv: q, pu: p, j0: j0 as i32, j1: j1 as i32, t: nb, e: (link >> LINK_BACK) & 15 })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::generate::{generate, GeneratorConfig};
+
+    /// Every cell is strictly convex and counter-clockwise, and every link leads to the
+    /// neighbour's copy of the same edge, walked the other way; wall edges lie on their walls.
+    #[test]
+    fn cells_are_convex_and_linked_both_ways() {
+        let walls = generate(3, &GeneratorConfig::default()).unwrap().scenario.map.segments;
+        let mesh = ScanMesh::new(&walls).unwrap();
+        assert!(mesh.cells() > 10);
+        let mut merged = 0;
+        for c in 1..=mesh.cells() {
+            let (cs, at) = mesh.corners(c);
+            let k = cs.len();
+            assert!((3..=MAX_CORNERS).contains(&k));
+            merged += (k > 3) as usize;
+            for i in 0..k {
+                let (p, q, r) = (cs[i], cs[(i + 1) % k], cs[(i + 2) % k]);
+                assert!(cross2(sub2(q, p), sub2(r, q)) > 0.0, "cell {c} corner {i}");
+                let link = mesh.link[at + i];
+                let nb = (link & LINK_CELL) as usize;
+                if nb != 0 {
+                    let (ns, _) = mesh.corners(nb);
+                    let b = ((link >> LINK_BACK) & 15) as usize;
+                    assert_eq!((ns[b], ns[(b + 1) % ns.len()]), (q, p), "cell {c} edge {i}");
+                }
+                if link & LINK_WALL != 0 {
+                    let [w0, w1] = mesh.edge_walls[mesh.edge_wall[at + i] as usize];
+                    for &w in &mesh.wall_ids[w0 as usize..w1 as usize] {
+                        let s = &walls[w as usize];
+                        assert!(s.distance_to_point(p) < 1e-9 && s.distance_to_point(q) < 1e-9);
+                    }
+                }
+            }
+        }
+        assert!(merged > 0, "no triangles merged");
     }
 }
