@@ -418,3 +418,31 @@ fn pruned_footprint_distance(shape: &RobotShape, pose: Pose2, walls: &[Segment],
     let limit = c2.iter().fold(Real::INFINITY, |m, &x| m.min(x)).sqrt() - inner + half_diagonal;
     walls.iter().zip(c2.iter()).filter(|(_, &x)| x < limit * limit).map(|(s, _)| footprint_segment_distance(shape, pose, s)).fold(Real::INFINITY, Real::min)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each way is timed once first, then the faster is taken but for every
+    /// [`SCAN_PROBE_EVERY`]-th scan, which takes the other; a way that turns slower is left.
+    #[test]
+    fn the_faster_way_to_scan_is_taken_and_the_other_probed() {
+        let mut c = ScanChoice::default();
+        let mut ways = Vec::new();
+        for k in 0..200u64 {
+            let walk = c.walk();
+            ways.push(walk);
+            // the walk takes 10 µs, the index 20 µs, until scan 100, then the other way round
+            let fast = if k < 100 { walk } else { !walk };
+            c.record(walk, if fast { 10_000.0 } else { 20_000.0 });
+        }
+        assert_eq!((ways[0], ways[1]), (false, true));
+        let walked = |r: std::ops::Range<usize>| ways[r].iter().filter(|&&w| w).count();
+        // scans 2..100: walking but at each probe
+        assert_eq!(walked(2..100), 98 - (2..100).filter(|k| (*k as u64).is_multiple_of(SCAN_PROBE_EVERY)).count());
+        // after the switch the next probe of the index finds it faster: the index from then
+        // on, but for the probes of the walk
+        let probe = (100..200).find(|k| (*k as u64).is_multiple_of(SCAN_PROBE_EVERY)).unwrap();
+        assert_eq!(walked(probe + 1..200), (probe + 1..200).filter(|k| (*k as u64).is_multiple_of(SCAN_PROBE_EVERY)).count(), "{:?}", &ways[100..200]);
+    }
+}
