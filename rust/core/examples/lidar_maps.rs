@@ -14,7 +14,13 @@
 //! and the places') as `map,range_m,where,x,y,least_us` (`benchmarks/plot_scan_cost.py` draws
 //! them on the maps).
 //!
-//! `cargo run --release -p shieldnav-core --example lidar_maps -- [--range M] [--rounds N] [--poses pacing|cycle16] [--simplify CELLS] [--places K] [--place-rounds N] [--csv PATH] [--maps DIR] [--only NAME]`
+//! By default the scans go through the bucket index (`Lidar::scan_indexed_into`). With
+//! `--mesh` they walk the triangulation of the walls instead (`Lidar::scan_mesh_into`), after
+//! a check that every scan of the start's poses equals the index's bit for bit (the beams that
+//! differ, the cells entered and walls swept per scan are printed). `World` takes whichever
+//! has lately been faster.
+//!
+//! `cargo run --release -p shieldnav-core --example lidar_maps -- [--range M] [--rounds N] [--poses pacing|cycle16] [--simplify CELLS] [--mesh] [--places K] [--place-rounds N] [--csv PATH] [--maps DIR] [--only NAME]`
 //!
 //! Defaults: `--range 20` (the LIDAR's default), `--rounds 400`, `--poses pacing`,
 //! `--simplify 1` (the maps' default contour tolerance, in cells: `RosMapOptions::simplify`),
@@ -75,7 +81,7 @@ fn parse() -> Result<Args, String> {
                     v => return Err(format!("--poses: expected pacing or cycle16, got {v:?}")),
                 }
             }
-            _ => return Err(format!("unknown argument {flag:?} (expected --range, --rounds, --poses, --simplify, --places, --place-rounds, --csv, --maps or --only)")),
+            _ => return Err(format!("unknown argument {flag:?} (expected --range, --rounds, --poses, --simplify, --mesh, --places, --place-rounds, --csv, --maps or --only)")),
         }
     }
     if args.rounds == 0 || args.place_rounds == 0 {
@@ -132,16 +138,16 @@ fn main() {
             let mesh = ScanMesh::new(&m.scenario.map.segments).unwrap_or_else(|e| fail(format!("{name}: no mesh: {e:?}")));
             eprintln!("{name}: mesh of {} cells in {:.1} ms", mesh.cells(), t.elapsed().as_secs_f64() * 1e3);
             let (mut a, mut b) = (Scan::default(), Scan::default());
-            let (mut bad, mut tri, mut rec, mut sw) = (0, 0, 0, 0);
+            let (mut bad, mut cells, mut rec, mut sw) = (0, 0, 0, 0);
             for &p in &pool {
                 lidar.scan_indexed_into(&index, &[], p, 0.0, &mut rng, &mut a).unwrap();
                 lidar.scan_mesh_into(&mesh, &index, &[], p, 0.0, &mut rng, &mut b).unwrap();
                 bad += a.ranges.iter().zip(&b.ranges).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
-                tri += lidar.last_mesh_stats().cells;
+                cells += lidar.last_mesh_stats().cells;
                 rec += lidar.last_mesh_stats().beams_recast;
                 sw += lidar.last_mesh_stats().walls_swept;
             }
-            eprintln!("{name}: {bad} beams differ over {} scans; {:.0} cells entered, {:.0} walls swept, {rec} recast", pool.len(), tri as f64 / pool.len() as f64, sw as f64 / pool.len() as f64);
+            eprintln!("{name}: {bad} beams differ over {} scans; {:.0} cells entered, {:.0} walls swept, {rec} recast", pool.len(), cells as f64 / pool.len() as f64, sw as f64 / pool.len() as f64);
             Some(mesh)
         } else {
             None
