@@ -344,7 +344,7 @@ impl Episode {
         let mut wc = self.config.world;
         wc.seed = world_seed(seed);
         let same_site = !matches!(self.site, Site::Procedural(_));
-        let world = World::new(scenario, wc)?;
+        let world = self.world.renew(scenario, wc)?;
         let start = world.true_pose();
         self.coverage = if same_site {
             let mut c = self.coverage.clone();

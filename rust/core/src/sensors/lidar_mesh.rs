@@ -1,17 +1,18 @@
 //! The planar LIDAR on big maps by walking a triangulation of the walls: every beam is
-//! followed from the triangle the sensor stands in, across triangle edges, until the first
-//! wall edge it crosses. Beams travel in windows (runs of consecutive columns through one
-//! edge), so a triangle is entered once per window and split by its third corner; a window
+//! followed from the cell the sensor stands in, across cell edges, until the first wall edge
+//! it crosses. Beams travel in windows (runs of consecutive columns through one edge), so a
+//! cell is entered once per window and the window split at the cell's corners; a window
 //! through a gap narrower than a beam step holds no beam and ends there. Only what the sensor
 //! can see is read: no wall behind another is ever looked at.
 //!
 //! The walls are the constraints of a constrained Delaunay triangulation (`spade`), in a box
 //! around them; triangles are merged into strictly convex cells of up to ten corners across
-//! the edges that are no wall (longest first), so that a beam crosses fewer edges. A wall edge stops the beams of its window when the wall blocks them (faces
-//! the sensor, and stands higher than a planar ring); their ranges are the wall's exact f64
-//! hits (the hit of the whole wall, as [`Lidar::scan_into`] computes it), so the ranges equal
-//! the other scans' bit for bit. A beam that passes within a nanometre of a corner of the
-//! triangulation, or that the wall's own hit test misses, is cast again against every wall.
+//! the edges that are no wall (longest first), so that a beam crosses fewer edges. A wall
+//! edge stops the beams of its window when the wall blocks them (faces the sensor, and stands
+//! higher than a planar ring); their ranges are the wall's exact f64 hits (the hit of the
+//! whole wall, as [`Lidar::scan_into`] computes it), so the ranges equal the other scans' bit
+//! for bit. A beam that passes within a nanometre of a cell's corner, or that the wall's own
+//! hit test misses, is cast again against every wall.
 
 use std::collections::HashMap;
 
@@ -23,7 +24,7 @@ use crate::math::Real;
 use crate::simd::SimdLevel;
 use crate::world::{cross2, sub2, Pose2, Segment};
 
-/// "None" in the triangle tables.
+/// "None" in the cell tables.
 const NONE: u32 = u32::MAX;
 
 /// Most corners of a cell: triangles merge into convex cells up to this size.
@@ -51,6 +52,14 @@ struct Window {
 /// Why a set of walls has no [`ScanMesh`]; the scans then use the bucket index.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NoMesh(pub String);
+
+impl std::fmt::Display for NoMesh {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "no triangulation of the walls: {}", self.0)
+    }
+}
+
+impl std::error::Error for NoMesh {}
 
 /// A triangulation of a world's walls for the planar scan (see the module's doc), its
 /// triangles merged into convex cells where no wall parts them.

@@ -11,6 +11,7 @@
 //! ```
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 use rand::SeedableRng;
@@ -132,8 +133,9 @@ pub struct World {
     scan: Scan,
     scan_body_pose: Pose2,
     index: SegmentIndex,
-    /// The walls triangulated for planar scans of big worlds (see [`SCAN_PROBE_EVERY`]).
-    mesh: Option<ScanMesh>,
+    /// The walls triangulated for planar scans of big worlds (see [`SCAN_PROBE_EVERY`]);
+    /// shared with the worlds of the same walls made by [`World::renew`].
+    mesh: Option<Arc<ScanMesh>>,
     choice: ScanChoice,
     near: Vec<Segment>,
     /// Squared distances from the robot's centre to `near`.
@@ -154,6 +156,18 @@ pub struct World {
 impl World {
     /// Builds a world from a scenario.
     pub fn new(scenario: Scenario, config: WorldConfig) -> Result<Self> {
+        Self::build(scenario, config, None)
+    }
+
+    /// A world like [`World::new`], sharing this world's triangulation of the walls when
+    /// `scenario` has the same walls and the LIDAR is planar (an episode's reset on the same
+    /// map: the triangulation of a real map takes milliseconds to build).
+    pub fn renew(&self, scenario: Scenario, config: WorldConfig) -> Result<Self> {
+        let same = self.mesh.is_some() && config.lidar.channels == 1 && scenario.map.segments == self.scenario.map.segments;
+        Self::build(scenario, config, if same { self.mesh.clone() } else { None })
+    }
+
+    fn build(scenario: Scenario, config: WorldConfig, mesh: Option<Arc<ScanMesh>>) -> Result<Self> {
         scenario.validate()?;
         if !(config.dt.is_finite() && config.dt > 0.0 && config.dt <= 0.1) {
             return Err(Error::invalid("dt", format!("must be in (0, 0.1] s, got {}", config.dt)));
@@ -165,7 +179,11 @@ impl World {
         let index = SegmentIndex::new(scenario.map.segments.clone(), 2.0)?;
         // (walls that cross each other, or none: no triangulation, the index alone)
         let big_planar = scenario.map.segments.len() > SCAN_ALL_WALLS_MAX && config.lidar.channels == 1;
-        let mesh = if big_planar { ScanMesh::new(&scenario.map.segments).ok() } else { None };
+        let mesh = if !big_planar {
+            None
+        } else {
+            mesh.or_else(|| ScanMesh::new(&scenario.map.segments).ok().map(Arc::new))
+        };
         let mut w = Self {
             scenario,
             config,
@@ -224,7 +242,7 @@ impl World {
         // the same ranges either way (tested); sweeping every wall is faster on small worlds
         if self.index.segments().len() <= SCAN_ALL_WALLS_MAX {
             self.lidar.scan_into(&[self.index.segments(), &self.moving], pose, self.time, &mut self.rng, &mut self.scan)?;
-        } else if let Some(mesh) = &self.mesh {
+        } else if let Some(mesh) = self.mesh.as_deref() {
             let walk = self.choice.walk();
             let t = Instant::now();
             if walk {
@@ -422,6 +440,37 @@ fn pruned_footprint_distance(shape: &RobotShape, pose: Pose2, walls: &[Segment],
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A world's renewal with the same walls shares its triangulation, and scans as a world
+    /// built anew; other walls get their own.
+    #[test]
+    fn a_renewed_world_shares_the_triangulation_of_the_same_walls() {
+        let mut scenario = preset("constricted_passage").unwrap();
+        for k in 0..40 {
+            let (x, y) = (2.0 * (k % 10) as Real, 40.0 + 2.0 * (k / 10) as Real);
+            let c = [[x, y], [x + 1.0, y], [x + 1.0, y + 1.0], [x, y + 1.0]];
+            for i in 0..4 {
+                scenario.map.segments.push(Segment::one_sided(c[i], c[(i + 1) % 4], 2.0));
+            }
+        }
+        assert!(scenario.map.segments.len() > SCAN_ALL_WALLS_MAX);
+        let config = WorldConfig::default();
+        let w = World::new(scenario.clone(), config).unwrap();
+        let mesh = w.mesh.clone().expect("a triangulation of the walls");
+        let again = w.renew(scenario.clone(), config).unwrap();
+        assert!(Arc::ptr_eq(&mesh, again.mesh.as_ref().unwrap()));
+        // (the first scans go through the index, the second ones walk: see `ScanChoice`)
+        let (mut a, mut b) = (again, World::new(scenario.clone(), config).unwrap());
+        for _ in 0..40 {
+            a.step([0.4, 0.0, 0.2]).unwrap();
+            b.step([0.4, 0.0, 0.2]).unwrap();
+            assert_eq!(a.scan().ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>(), b.scan().ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>());
+        }
+        assert!(a.choice.scans >= 3, "{:?}", a.choice);
+        scenario.map.segments.pop();
+        let other = w.renew(scenario, config).unwrap();
+        assert!(!Arc::ptr_eq(&mesh, other.mesh.as_ref().unwrap()));
+    }
 
     /// Each way is timed once first, then the faster is taken but for every
     /// [`SCAN_PROBE_EVERY`]-th scan, which takes the other; a way that turns slower is left.
