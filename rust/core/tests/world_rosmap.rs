@@ -300,13 +300,14 @@ fn indexed_scan_equals_the_full_scan_on_real_maps() {
     use shieldnav_core::world::SegmentIndex;
     let mut groups_occluded = 0;
     let mut maps = 0;
+    let mut recast = 0;
     for (name, m) in all_maps(true) {
         maps += 1;
         let walls = &m.scenario.map.segments;
         let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
         // every map's walls triangulate, and the walk gives the full scan's ranges too
         let mesh = ScanMesh::new(walls).unwrap_or_else(|e| panic!("{name}: {e:?}"));
-        let mut c = Scan::default();
+        let (mut c, mut c_) = (Scan::default(), Scan::default());
         let mut lidar = Lidar::new(LidarConfig { range_noise_std: 0.0, max_range: 20.0, ..LidarConfig::default() }).unwrap();
         let (mut a, mut b) = (Scan::default(), Scan::default());
         let mut rng = ChaCha8Rng::seed_from_u64(0);
@@ -330,10 +331,27 @@ fn indexed_scan_equals_the_full_scan_on_real_maps() {
             assert!(!ms.fell_back && ms.cells > 0 && ms.walls_swept < walls.len() / 2, "{name}: {ms:?}");
             groups_occluded += st.groups_occluded;
             if k == 0 {
-                eprintln!("{name}: {} walls, {st:?}", walls.len());
+                eprintln!("{name}: {} walls, {st:?}, walked {ms:?}", walls.len());
             }
         }
+        // beside wall corners, on the grid's lines, beams along the map's axes: along walls,
+        // through corners (the walk casts those beams again)
+        let near: Vec<_> = walls.iter().filter(|w| (w.a[0] - s.x).hypot(w.a[1] - s.y) < 6.0).take(12).collect();
+        let yaw = m.grid.origin.yaw;
+        let (cy, sy) = (yaw.cos(), yaw.sin());
+        for (k, w) in near.iter().enumerate() {
+            let off = [0.25, 0.0, 0.3][k % 3];
+            let (dx, dy) = if k % 2 == 0 { (cy * off, sy * off) } else { (-sy * off, cy * off) };
+            let p = shieldnav_core::world::Pose2::new(w.a[0] + dx, w.a[1] + dy, yaw + if k % 2 == 0 { 0.0 } else { std::f64::consts::FRAC_PI_2 });
+            lidar.scan_into(&[walls], p, 0.0, &mut rng, &mut a).unwrap();
+            lidar.scan_mesh_into(&mesh, &index, &[], p, 0.0, &mut rng, &mut c_).unwrap();
+            for (i, (x, y)) in a.ranges.iter().zip(&c_.ranges).enumerate() {
+                assert!(x == y || (x - y).abs() <= 1e-12 * x, "{name} beside corner {k} beam {i}: {x} vs walked {y}");
+            }
+            recast += lidar.last_mesh_stats().beams_recast;
+        }
     }
-    // some groups of pieces behind nearer walls were skipped whole
-    assert!(maps == 0 || groups_occluded > 0);
+    // some groups of pieces behind nearer walls were skipped whole; beams along the grid's
+    // lines were cast again
+    assert!(maps == 0 || groups_occluded > 0 && recast > 0, "{groups_occluded} groups skipped, {recast} beams recast");
 }

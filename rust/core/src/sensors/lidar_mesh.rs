@@ -19,7 +19,7 @@ use std::collections::HashMap;
 use spade::handles::FixedVertexHandle;
 use spade::{ConstrainedDelaunayTriangulation, PositionInTriangulation, Triangulation};
 
-use super::lidar::{fast_atan2, iceil, Lidar, Scan};
+use super::lidar::{fast_atan2, iceil, seg_origin_distance, Lidar, Scan};
 use crate::math::Real;
 use crate::simd::SimdLevel;
 use crate::world::{cross2, sub2, Pose2, Segment};
@@ -480,15 +480,25 @@ impl Lidar {
         recast.sort_unstable();
         recast.dedup();
         stats.beams_recast = recast.len();
+        // (a beam along a wall's line, within rounding, gets from its hit test a quotient of
+        // two roundings: a "hit" nearer than the wall itself is no hit, as the other scans,
+        // which skip a wall no nearer than the beam's range so far, never see it)
         for &i in recast.iter() {
             let i = i as usize;
-            ranges[i] = Real::INFINITY;
+            let mut best = Real::INFINITY;
             for seg in &mesh.segments {
                 if w.zs > seg.height || !seg.faces(s) {
                     continue;
                 }
-                self.sweep(w.frame(seg.a), w.frame(seg.b), seg.height, i as i64, 1, w.zs, -1.0, ranges);
+                let (a, b) = (w.frame(seg.a), w.frame(seg.b));
+                ranges[i] = Real::INFINITY;
+                self.sweep(a, b, seg.height, i as i64, 1, w.zs, -1.0, ranges);
+                let t = ranges[i];
+                if t < best && t >= seg_origin_distance(a, b) * (1.0 - 1e-9) {
+                    best = t;
+                }
             }
+            ranges[i] = best;
         }
         true
     }
