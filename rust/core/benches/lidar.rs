@@ -68,8 +68,8 @@ fn bench(c: &mut Criterion) {
                 black_box(&scan.ranges);
             })
         });
-        // (the boxes of this world overlap, and walls that cross have no triangulation)
-        if let (1, Ok(mesh)) = (cfg.channels, ScanMesh::new(&walls)) {
+        if cfg.channels == 1 {
+            let mesh = ScanMesh::new(&walls).unwrap();
             let mut k = 0;
             g.bench_function(format!("{name}_walk"), |b| {
                 b.iter(|| {
@@ -95,6 +95,15 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             k = (k + 1) % poses.len();
             lidar.scan_into(&[black_box(&solid)], poses[k], 0.0, &mut rng, &mut scan).unwrap();
+            black_box(&scan.ranges);
+        })
+    });
+    let (solid_index, solid_mesh) = (SegmentIndex::new(solid.clone(), 2.0).unwrap(), ScanMesh::new(&solid).unwrap());
+    let mut k = 0;
+    g.bench_function("planar_1024_world200_solid_boxes_walk", |b| {
+        b.iter(|| {
+            k = (k + 1) % poses.len();
+            lidar.scan_mesh_into(black_box(&solid_mesh), &solid_index, &[], poses[k], 0.0, &mut rng, &mut scan).unwrap();
             black_box(&scan.ranges);
         })
     });

@@ -259,12 +259,40 @@ fn mesh_scan_equals_the_full_scan_bit_for_bit() {
     assert!(walked > 500 && recast > 0 && fell_back > 0, "walked {walked}, recast {recast}, fell back {fell_back}");
 }
 
+/// Walls that cross are split where they cross (200 random walls, and an X), and the walk
+/// still gives the full scan's ranges bit for bit; walls without length have no mesh.
 #[test]
-fn walls_that_cross_have_no_mesh() {
+fn walls_that_cross_are_split_where_they_cross() {
     use shieldnav_core::sensors::ScanMesh;
-    let cross = [Segment::new([0.0, 0.0], [2.0, 2.0], 1.0), Segment::new([0.0, 2.0], [2.0, 0.0], 1.0)];
-    let e = ScanMesh::new(&cross).unwrap_err();
-    assert!(e.0.contains("cross"), "{e:?}");
+    use shieldnav_core::world::SegmentIndex;
+    let mut rng = ChaCha8Rng::seed_from_u64(42);
+    let mut walked = 0;
+    for round in 0..6 {
+        let walls: Vec<Segment> = if round == 0 {
+            vec![Segment::new([0.0, 0.0], [2.0, 2.0], 1.0), Segment::new([0.0, 2.0], [2.0, 0.0], 1.0)]
+        } else {
+            (0..200)
+                .map(|_| {
+                    let a = [rng.random_range(-15.0..15.0), rng.random_range(-15.0..15.0)];
+                    let b = [a[0] + rng.random_range(-3.0..3.0), a[1] + rng.random_range(-3.0..3.0)];
+                    if rng.random_bool(0.5) { Segment::new(a, b, rng.random_range(0.3..3.0)) } else { Segment::one_sided(a, b, 2.0) }
+                })
+                .collect()
+        };
+        let mesh = ScanMesh::new(&walls).unwrap();
+        let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        let mut lidar = Lidar::new(exact(1, 1024)).unwrap();
+        let (mut a, mut b) = (Scan::default(), Scan::default());
+        for _ in 0..20 {
+            let p = Pose2::new(rng.random_range(-4.0..4.0), rng.random_range(-4.0..4.0), rng.random_range(-3.2..3.2));
+            lidar.scan_into(&[&walls], p, 0.0, &mut rng, &mut a).unwrap();
+            lidar.scan_mesh_into(&mesh, &index, &[], p, 0.0, &mut rng, &mut b).unwrap();
+            let diff: Vec<_> = (0..1024).filter(|&i| a.ranges[i].to_bits() != b.ranges[i].to_bits()).map(|i| (i, a.ranges[i], b.ranges[i])).collect();
+            assert!(diff.is_empty(), "round {round} pose {p:?}: {diff:?}");
+            walked += !lidar.last_mesh_stats().fell_back as usize;
+        }
+    }
+    assert!(walked > 90, "walked {walked}");
     let e = ScanMesh::new(&[Segment::new([1.0, 1.0], [1.0, 1.0], 1.0)]).unwrap_err();
     assert!(e.0.contains("wall 0"), "{e:?}");
     assert!(ScanMesh::new(&[]).is_err());

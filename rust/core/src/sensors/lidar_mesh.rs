@@ -109,8 +109,14 @@ pub(super) struct MeshScratch {
 }
 
 impl ScanMesh {
-    /// Triangulates `segments` (finite, of non-zero length, crossing nowhere but at their ends).
+    /// Triangulates `segments` (finite, of non-zero length; walls that cross are split where
+    /// they cross).
     pub fn new(segments: &[Segment]) -> Result<Self, NoMesh> {
+        // (a failure inside the triangulation library is reported, not passed on as a panic)
+        std::panic::catch_unwind(|| Self::build(segments)).unwrap_or_else(|_| Err(NoMesh("the triangulation failed".into())))
+    }
+
+    fn build(segments: &[Segment]) -> Result<Self, NoMesh> {
         let mut ids: HashMap<(u64, u64), u32> = HashMap::with_capacity(segments.len() * 2);
         let mut pts: Vec<spade::Point2<Real>> = Vec::with_capacity(segments.len() * 2 + 4);
         let (mut lo, mut hi) = ([Real::INFINITY; 2], [Real::NEG_INFINITY; 2]);
@@ -144,13 +150,20 @@ impl ScanMesh {
         pairs.sort_unstable();
         pairs.dedup();
         let n_pts = pts.len();
+        type Cdt = ConstrainedDelaunayTriangulation<spade::Point2<Real>>;
+        let failed = |e: spade::InsertionError| NoMesh(format!("triangulation failed: {e:?}"));
         let mut conflicts = 0usize;
-        let cdt = ConstrainedDelaunayTriangulation::<spade::Point2<Real>>::try_bulk_load_cdt(pts, pairs, |_| conflicts += 1)
-            .map_err(|e| NoMesh(format!("triangulation failed: {e:?}")))?;
+        let mut cdt = Cdt::try_bulk_load_cdt(pts.clone(), pairs.clone(), |_| conflicts += 1).map_err(failed)?;
         if conflicts > 0 {
-            return Err(NoMesh(format!("{conflicts} walls cross others")));
+            // walls that cross: inserted one by one, each split where it crosses another (at a
+            // corner rounded off the walls' lines by about 1e-16 of their size: the beams
+            // within a nanometre of it are cast again)
+            cdt = Cdt::bulk_load_cdt(pts, Vec::new()).map_err(failed)?;
+            for &[a, b] in &pairs {
+                cdt.add_constraint_and_split(FixedVertexHandle::from_index(a), FixedVertexHandle::from_index(b), |p| p);
+            }
         }
-        if cdt.num_vertices() != n_pts {
+        if cdt.num_vertices() < n_pts || cdt.vertices().take(n_pts).zip(0..).any(|(v, i)| v.fix().index() != i) {
             return Err(NoMesh("vertices merged".into()));
         }
         let verts: Vec<[Real; 2]> = cdt.vertices().map(|v| [v.position().x, v.position().y]).collect();
@@ -182,7 +195,7 @@ impl ScanMesh {
                 on_edge.entry((x.min(y), x.max(y))).or_default().push(k as u32);
                 cur = e.to().index();
                 steps += 1;
-                if steps > n_pts {
+                if steps > verts.len() {
                     return Err(NoMesh(format!("wall {k} not found in the triangulation")));
                 }
             }

@@ -177,7 +177,7 @@ impl World {
         let physics = PhysicsScene::new(config.robot, &scenario.map.segments, &scenario.obstacles, scenario.start, 0.0)?;
         let odometry = Odometry::new(scenario.odometry.clone(), scenario.start, 0.0)?;
         let index = SegmentIndex::new(scenario.map.segments.clone(), 2.0)?;
-        // (walls that cross each other, or none: no triangulation, the index alone)
+        // (a failed triangulation leaves the index alone)
         let big_planar = scenario.map.segments.len() > SCAN_ALL_WALLS_MAX && config.lidar.channels == 1;
         let mesh = if !big_planar {
             None
