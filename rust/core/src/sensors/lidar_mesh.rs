@@ -583,19 +583,14 @@ impl Walker<'_> {
     /// the beams lie within half a turn of each other.
     #[inline(always)]
     fn split(&self, p: [Real; 2], j0: i64, j1: i64, recast: &mut Vec<u32>) -> i64 {
-        let first = self.side(p, j0);
-        if first >= 0.0 {
-            if first <= NEAR {
-                recast.push((j0 & self.mask) as u32);
+        // the end beams first, both at once: most windows leave whole by one side (one branch
+        // to foresee instead of two)
+        let (first, last) = (self.side(p, j0), self.side(p, j1 - 1));
+        if (first >= 0.0) | (last < 0.0) {
+            if (first.abs() <= NEAR) | (last.abs() <= NEAR) {
+                recast.extend([(j0 & self.mask) as u32, ((j1 - 1) & self.mask) as u32]);
             }
-            return j0;
-        }
-        let last = self.side(p, j1 - 1);
-        if last < 0.0 {
-            if last >= -NEAR {
-                recast.push(((j1 - 1) & self.mask) as u32);
-            }
-            return j1;
+            return if first >= 0.0 { j0 } else { j1 };
         }
         // beam j0 is clockwise of p, beam j1 - 1 at or counter-clockwise of it
         let m = if j1 - j0 <= 8 {
