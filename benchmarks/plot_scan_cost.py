@@ -1,7 +1,7 @@
 """Where on a map the LIDAR's scan is slow: the times of `lidar_maps --csv` drawn on the maps.
 
     cargo run --release -p shieldnav-core --example lidar_maps -- --places 32 --csv scan_cost.csv
-    python benchmarks/plot_scan_cost.py scan_cost.csv --maps ../shared/maps [--only g4s_office ut_gdc_floor2] [--out docs/img/scan_cost.png]
+    python benchmarks/plot_scan_cost.py scan_cost.csv --maps ../shared/maps [--only g4s_office ut_gdc_floor2] [--how walking] [--out docs/img/scan_cost.png]
 
 One panel per map: its walls (default contours), each place timed as a dot coloured by the
 least time per planar 1024-column scan there (a robot pacing 0.75 m), the start (the map's
@@ -42,6 +42,7 @@ def main() -> None:
     ap.add_argument("--only", nargs="+", help="these maps (default: every map in the CSV)")
     ap.add_argument("--range", type=float, help="the range (m) whose times to draw, if the CSV has several")
     ap.add_argument("--out", type=Path, default=Path("docs/img/scan_cost.png"))
+    ap.add_argument("--how", default="", help="how the scans were taken, for the titles (e.g. 'walking', for `lidar_maps --mesh`)")
     args = ap.parse_args()
 
     times = read_times(args.csv)
@@ -88,7 +89,8 @@ def main() -> None:
         ok = int((places[:, 2] <= TARGET_US).sum())
         ax.autoscale()
         ax.set_aspect("equal")
-        ax.set_title(f"{name}, {rows[0][4]:g} m range: {ok} of {len(places)} places within {TARGET_US:g} µs")
+        how = f", {args.how}" if args.how else ""
+        ax.set_title(f"{name}, {rows[0][4]:g} m range{how}: {ok} of {len(places)} places within {TARGET_US:g} µs")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
         ax.legend(
