@@ -710,6 +710,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(2);
         for (name, walls, points) in worlds {
             let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+            let mesh = super::super::lidar_mesh::ScanMesh::new(&walls).unwrap();
             for channels in [1, 16] {
                 let mut l = Lidar::new(LidarConfig { channels, range_noise_std: 0.0, ..Default::default() }).unwrap();
                 for (k, w) in points.iter().enumerate() {
@@ -730,6 +731,21 @@ mod tests {
                     assert!(scans[0].ranges.iter().filter(|r| r.is_finite()).count() > 300 * channels);
                     assert_eq!(bits(&scans[0]), bits(&scans[1]), "{name}: AVX2, {channels} channels, pose {k}");
                     assert_eq!(bits(&scans[0]), bits(&scans[3]), "{name}: eight pieces at once, {channels} channels, pose {k}");
+                    if channels == 1 {
+                        // the walk of the triangulation, portable and built for AVX2
+                        for simd in [SimdLevel::Portable, SimdLevel::Avx2] {
+                            l.simd = simd;
+                            let mut s = Scan::default();
+                            l.begin_scan(pose, 0.0, &mut s).unwrap();
+                            assert!(l.sweep_mesh(&mesh, sp, &mut s), "{name}: pose {k} off the triangulation");
+                            // (before the range limits: the walk may keep a hit beyond the
+                            // range where the index never swept that wall)
+                            let max = l.config.max_range;
+                            let clip = |r: Real| if r <= max { r.to_bits() } else { Real::INFINITY.to_bits() };
+                            let diff: Vec<_> = (0..s.ranges.len()).filter(|&i| clip(scans[0].ranges[i]) != clip(s.ranges[i])).map(|i| (i, scans[0].ranges[i], s.ranges[i])).take(6).collect();
+                            assert!(diff.is_empty(), "{name}: the walk ({simd:?}), pose {k}: {diff:?}");
+                        }
+                    }
                     if best == SimdLevel::Avx512 {
                         l.simd = SimdLevel::Avx512;
                         // SAFETY: this CPU runs AVX-512.
