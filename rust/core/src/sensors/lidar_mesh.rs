@@ -6,13 +6,14 @@
 //! can see is read: no wall behind another is ever looked at.
 //!
 //! The walls are the constraints of a constrained Delaunay triangulation (`spade`), in a box
-//! around them; triangles are merged into strictly convex cells of up to ten corners across
+//! around them (walls that cross are split where they cross); triangles are merged into strictly convex cells of up to ten corners across
 //! the edges that are no wall (longest first), so that a beam crosses fewer edges. A wall
 //! edge stops the beams of its window when the wall blocks them (faces the sensor, and stands
 //! higher than a planar ring); their ranges are the wall's exact f64 hits (the hit of the
 //! whole wall, as [`Lidar::scan_into`] computes it), so the ranges equal the other scans' bit
-//! for bit. A beam that passes within a nanometre of a cell's corner, or that the wall's own
-//! hit test misses, is cast again against every wall.
+//! for bit (once the range limits are applied: a wall partly in range may give a hit beyond
+//! it, which the index never computes). A beam that passes within a nanometre of a cell's
+//! corner, or that the wall's own hit test misses, is cast again against every wall.
 
 use std::collections::HashMap;
 
