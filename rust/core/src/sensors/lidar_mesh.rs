@@ -565,17 +565,24 @@ impl Walker<'_> {
         }
     }
 
-    /// The first column at or counter-clockwise of `p` (sensor frame), near its angle.
+    /// The first column at or counter-clockwise of `p` (sensor frame), near its angle: from
+    /// the angle (within 1.1e-5 rad, far below a beam step), set right by the beams beside it.
     #[inline(always)]
-    fn col(&self, p: [Real; 2], recast: &mut Vec<u32>) -> i64 {
+    fn column(&self, p: [Real; 2]) -> i64 {
         let j = iceil(fast_atan2(p[1], p[0]) * self.lidar.inv_step);
-        let j = if self.side(p, j) < 0.0 {
+        if self.side(p, j) < 0.0 {
             j + 1
         } else if self.side(p, j - 1) >= 0.0 {
             j - 1
         } else {
             j
-        };
+        }
+    }
+
+    /// [`Walker::column`], the beams beside `p` marked for recasting if near it.
+    #[inline(always)]
+    fn col(&self, p: [Real; 2], recast: &mut Vec<u32>) -> i64 {
+        let j = self.column(p);
         self.near(p, j, recast);
         j
     }
@@ -601,18 +608,10 @@ impl Walker<'_> {
             }
             m
         } else {
+            // (the column taken to the window's turn; within the window by the tests above)
             let n = self.mask + 1;
-            let mut m = iceil(fast_atan2(p[1], p[0]) * self.lidar.inv_step);
-            let mid = (j0 + j1) >> 1;
-            m += n * (mid - m + n / 2).div_euclid(n);
-            let m = m.clamp(j0 + 1, j1 - 1);
-            if self.side(p, m) < 0.0 {
-                m + 1
-            } else if self.side(p, m - 1) >= 0.0 {
-                m - 1
-            } else {
-                m
-            }
+            let m = self.column(p);
+            (m + n * (((j0 + j1) >> 1) - m + n / 2).div_euclid(n)).clamp(j0 + 1, j1 - 1)
         };
         self.near(p, m, recast);
         m
