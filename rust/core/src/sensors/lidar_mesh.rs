@@ -50,6 +50,14 @@ struct Window {
     e: u32,
 }
 
+/// Beams `j0..j1` (columns, unwrapped) stopped by wall `wall` (an index into the walls).
+#[derive(Debug, Clone, Copy)]
+struct Sweep {
+    wall: u32,
+    j0: i32,
+    j1: i32,
+}
+
 /// Why a set of walls has no [`ScanMesh`]; the scans then use the bucket index.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NoMesh(pub String);
@@ -105,6 +113,7 @@ pub struct MeshScanStats {
 #[derive(Debug, Clone, Default)]
 pub(super) struct MeshScratch {
     stack: Vec<Window>,
+    sweeps: Vec<Sweep>,
     recast: Vec<u32>,
     pub(super) stats: MeshScanStats,
 }
@@ -434,6 +443,8 @@ impl Lidar {
         recast.clear();
         let stack = &mut sc.stack;
         stack.clear();
+        let sweeps = &mut sc.sweeps;
+        sweeps.clear();
         let stats = &mut sc.stats;
         // the start cell: its corners' columns, in turn counter-clockwise round the sensor
         let (cs, at) = mesh.corners(t0);
@@ -452,7 +463,7 @@ impl Lidar {
         }
         (p[k], cols[k]) = (p[0], cols[0] + n);
         for i in 0..k {
-            if let Some(next) = w.edge(at + i, p[i], p[i + 1], cols[i], cols[i + 1], ranges, recast, &mut stats.walls_swept) {
+            if let Some(next) = w.edge(at + i, p[i], p[i + 1], cols[i], cols[i + 1], sweeps, &mut stats.walls_swept) {
                 stack.push(next);
             }
         }
@@ -476,7 +487,7 @@ impl Lidar {
                     let to = w.frame(cs[i1]);
                     (to, w.split(to, lo, j1, recast))
                 };
-                if let Some(out) = w.edge(at + i, from, to, lo, m, ranges, recast, &mut stats.walls_swept) {
+                if let Some(out) = w.edge(at + i, from, to, lo, m, sweeps, &mut stats.walls_swept) {
                     match next {
                         None => next = Some(out),
                         Some(_) => stack.push(out),
@@ -489,6 +500,20 @@ impl Lidar {
             }
             // on through one side at once, the others later
             cur = next.or_else(|| stack.pop());
+        }
+        // the beams of each wall edge reached, with its walls' exact hits (after the walk, so
+        // that its loop stays small), and those the walls missed marked for recasting
+        for sw in sweeps.iter() {
+            let seg = &mesh.segments[sw.wall as usize];
+            self.sweep_flat(w.frame(seg.a), w.frame(seg.b), sw.j0 as i64, (sw.j1 - sw.j0) as usize, ranges);
+        }
+        for sw in sweeps.iter() {
+            for j in sw.j0..sw.j1 {
+                let i = (j as i64 & w.mask) as usize;
+                if ranges[i] == Real::INFINITY {
+                    recast.push(i as u32);
+                }
+            }
         }
         // beams through a corner, or missed by the wall they crossed: against every wall
         recast.sort_unstable();
@@ -622,7 +647,7 @@ impl Walker<'_> {
     /// there blocks them (counted in `swept`), else the window into the next cell.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn edge(&self, g: usize, p: [Real; 2], q: [Real; 2], j0: i64, j1: i64, ranges: &mut [Real], recast: &mut Vec<u32>, swept: &mut usize) -> Option<Window> {
+    fn edge(&self, g: usize, p: [Real; 2], q: [Real; 2], j0: i64, j1: i64, sweeps: &mut Vec<Sweep>, swept: &mut usize) -> Option<Window> {
         if j0 >= j1 {
             return None;
         }
@@ -645,21 +670,9 @@ impl Walker<'_> {
                     continue;
                 }
                 blocked = true;
-                self.lidar.sweep_flat(self.frame(seg.a), self.frame(seg.b), j0, (j1 - j0) as usize, ranges);
+                sweeps.push(Sweep { wall: wi, j0: j0 as i32, j1: j1 as i32 });
             }
             if blocked {
-                let mut missed = false;
-                for j in j0..j1 {
-                    missed |= ranges[(j & self.mask) as usize] == Real::INFINITY;
-                }
-                if missed {
-                    for j in j0..j1 {
-                        let i = (j & self.mask) as usize;
-                        if ranges[i] == Real::INFINITY {
-                            recast.push(i as u32);
-                        }
-                    }
-                }
                 *swept += 1;
                 return None;
             }
