@@ -433,18 +433,19 @@ impl Lidar {
     /// [`Lidar::sweep`] for a planar ring, without branches but for walls parallel to a beam;
     /// with AVX2, four beams at once (see [`super::simd::flat_blocks_avx2`]), else more than a
     /// few beams go over contiguous runs, so that the divisions run several to an instruction.
+    /// Returns whether one of the beams has no range (`inf`) after the sweep.
     #[inline(always)]
-    pub(super) fn sweep_flat(&self, a: [Real; 2], b: [Real; 2], j0: i64, count: usize, best: &mut [Real]) {
+    pub(super) fn sweep_flat(&self, a: [Real; 2], b: [Real; 2], j0: i64, count: usize, best: &mut [Real]) -> bool {
         let n = self.config.columns;
         let i0 = (j0 & (n as i64 - 1)) as usize;
         let e = [b[0] - a[0], b[1] - a[1]];
         let ae = cross2(a, e);
-        let mut parallel = false;
+        let (mut parallel, mut missed) = (false, false);
         if cfg!(target_arch = "x86_64") && self.simd != SimdLevel::Portable && i0 + count <= n {
             #[cfg(target_arch = "x86_64")]
             {
                 // SAFETY: `simd` is not `Portable` only on a CPU found to run AVX2.
-                parallel = unsafe { super::simd::flat_blocks_avx2(a, e, ae, &self.az_cos, &self.az_sin, best, i0, count) };
+                (parallel, missed) = unsafe { super::simd::flat_blocks_avx2(a, e, ae, &self.az_cos, &self.az_sin, best, i0, count) };
             }
         } else if count <= 8 {
             let mut i = i0;
@@ -452,6 +453,7 @@ impl Lidar {
                 let (r, par) = flat_beam(a, e, ae, self.az_cos[i], self.az_sin[i], best[i]);
                 best[i] = r;
                 parallel |= par;
+                missed |= r == Real::INFINITY;
                 i = (i + 1) & (n - 1);
             }
         } else {
@@ -462,11 +464,13 @@ impl Lidar {
                     let (r, par) = flat_beam(a, e, ae, dc, ds, *cur);
                     *cur = r;
                     parallel |= par;
+                    missed |= r == Real::INFINITY;
                 }
             }
         }
         if parallel {
             // a beam parallel to the wall (rare): the general test for those beams
+            missed = false;
             for k in 0..count {
                 let i = (i0 + k) & (n - 1);
                 let (dc, ds) = (self.az_cos[i], self.az_sin[i]);
@@ -475,8 +479,10 @@ impl Lidar {
                         best[i] = best[i].min(t);
                     }
                 }
+                missed |= best[i] == Real::INFINITY;
             }
         }
+        missed
     }
 
     /// Applies range limits, noise and dropout, and fills the body-frame points.
@@ -808,11 +814,14 @@ mod tests {
             let start: Vec<Real> = (0..1024).map(|_| if rng.random_bool(0.3) { Real::INFINITY } else { rng.random_range(0.1..8.0) }).collect();
             let (mut portable, mut vector) = (start.clone(), start);
             l.simd = SimdLevel::Portable;
-            l.sweep_flat(a, b, j0, count, &mut portable);
+            let portable_missed = l.sweep_flat(a, b, j0, count, &mut portable);
             l.simd = SimdLevel::Avx2;
-            l.sweep_flat(a, b, j0, count, &mut vector);
+            let vector_missed = l.sweep_flat(a, b, j0, count, &mut vector);
             let bits = |v: &[Real]| v.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&portable), bits(&vector), "wall {a:?} {b:?}, beams {j0} + {count}");
+            // whether a swept beam is left without a range, from either build
+            let missed = (0..count).any(|k| portable[(j0 + k as i64).rem_euclid(1024) as usize] == Real::INFINITY);
+            assert_eq!((portable_missed, vector_missed), (missed, missed), "wall {a:?} {b:?}, beams {j0} + {count}");
         }
         assert!(parallel > 100, "{parallel} walls with a parallel beam");
     }

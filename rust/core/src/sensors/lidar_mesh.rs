@@ -503,15 +503,19 @@ impl Lidar {
         }
         // the beams of each wall edge reached, with its walls' exact hits (after the walk, so
         // that its loop stays small), and those the walls missed marked for recasting
+        let mut missed = false;
         for sw in sweeps.iter() {
             let seg = &mesh.segments[sw.wall as usize];
-            self.sweep_flat(w.frame(seg.a), w.frame(seg.b), sw.j0 as i64, (sw.j1 - sw.j0) as usize, ranges);
+            missed |= self.sweep_flat(w.frame(seg.a), w.frame(seg.b), sw.j0 as i64, (sw.j1 - sw.j0) as usize, ranges);
         }
-        for sw in sweeps.iter() {
-            for j in sw.j0..sw.j1 {
-                let i = (j as i64 & w.mask) as usize;
-                if ranges[i] == Real::INFINITY {
-                    recast.push(i as u32);
+        if missed {
+            // (rare: a beam may also have been missed by one wall of an edge and hit by another)
+            for sw in sweeps.iter() {
+                for j in sw.j0..sw.j1 {
+                    let i = (j as i64 & w.mask) as usize;
+                    if ranges[i] == Real::INFINITY {
+                        recast.push(i as u32);
+                    }
                 }
             }
         }

@@ -9,7 +9,8 @@ use crate::math::Real;
 /// lengths of the beam tables `cos`, `sin`), each keeping its nearest range in `best`: the
 /// same test and quotient as `Lidar::sweep_flat`'s, four beams at once, over the aligned
 /// blocks of four that hold them (the beams outside are stored unchanged). Returns whether
-/// one of the beams is parallel to the wall (left unchanged, for the caller to test).
+/// one of the beams is parallel to the wall (left unchanged, for the caller to test), and
+/// whether one of them has no range (`inf`) after the sweep.
 ///
 /// Aligned blocks, so that a block one wall stores the next loads whole (a load spanning two
 /// stores waits for both to retire); a minimum, not a select, so that the store is not made a
@@ -18,7 +19,7 @@ use crate::math::Real;
 #[target_feature(enable = "avx2")]
 #[inline]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn flat_blocks_avx2(a: [Real; 2], e: [Real; 2], ae: Real, cos: &[Real], sin: &[Real], best: &mut [Real], i0: usize, count: usize) -> bool {
+pub(super) fn flat_blocks_avx2(a: [Real; 2], e: [Real; 2], ae: Real, cos: &[Real], sin: &[Real], best: &mut [Real], i0: usize, count: usize) -> (bool, bool) {
     use std::arch::x86_64::*;
     let (lo, hi) = (i0 & !3, (i0 + count).next_multiple_of(4));
     let blocks = cos[lo..hi].as_chunks::<4>().0.iter().zip(sin[lo..hi].as_chunks::<4>().0).zip(best[lo..hi].as_chunks_mut::<4>().0);
@@ -30,7 +31,7 @@ pub(super) fn flat_blocks_avx2(a: [Real; 2], e: [Real; 2], ae: Real, cos: &[Real
     // the beams swept are the lanes `first..end` of the blocks, counted from `lo`
     let (first, end) = (_mm256_set1_pd((i0 - lo) as Real), _mm256_set1_pd((i0 + count - lo) as Real));
     let (mut lane, four) = (_mm256_set_pd(3.0, 2.0, 1.0, 0.0), _mm256_set1_pd(4.0));
-    let mut parallel = zero;
+    let (mut parallel, mut missed) = (zero, zero);
     for ((dc, ds), cur) in blocks {
         // SAFETY: each block holds four values.
         let (dc, ds, old) = unsafe { (_mm256_loadu_pd(dc.as_ptr()), _mm256_loadu_pd(ds.as_ptr()), _mm256_loadu_pd(cur.as_ptr())) };
@@ -43,9 +44,10 @@ pub(super) fn flat_blocks_avx2(a: [Real; 2], e: [Real; 2], ae: Real, cos: &[Real
         let take = _mm256_and_pd(_mm256_and_pd(_mm256_or_pd(ahead, behind), on), _mm256_cmp_pd::<_CMP_LT_OQ>(t, old));
         let new = _mm256_min_pd(old, _mm256_blendv_pd(inf, t, take));
         parallel = _mm256_or_pd(parallel, _mm256_and_pd(on, _mm256_cmp_pd::<_CMP_EQ_OQ>(den, zero)));
+        missed = _mm256_or_pd(missed, _mm256_and_pd(on, _mm256_cmp_pd::<_CMP_EQ_OQ>(new, inf)));
         // SAFETY: the block holds four values.
         unsafe { _mm256_storeu_pd(cur.as_mut_ptr(), new) };
         lane = _mm256_add_pd(lane, four);
     }
-    _mm256_movemask_pd(parallel) != 0
+    (_mm256_movemask_pd(parallel) != 0, _mm256_movemask_pd(missed) != 0)
 }
