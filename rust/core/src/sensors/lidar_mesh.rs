@@ -347,7 +347,51 @@ impl ScanMesh {
                 grid.push(cell_of_face[t].max(1));
             }
         }
-        Ok(Self { segments: segments.to_vec(), start, corner, link, edge_wall, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims })
+        let mesh = Self { segments: segments.to_vec(), start, corner, link, edge_wall, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims };
+        mesh.check_tables()?;
+        Ok(mesh)
+    }
+
+    /// That every index in the tables is in bounds, which the walk's reads without bounds
+    /// checks rely on (see [`ScanMesh::corners`] and [`Walker::edge`]): cell 0 has no corners,
+    /// every other cell 3 to [`MAX_CORNERS`]; every link leads to a cell and to one of its
+    /// edges; every wall edge to a run of walls.
+    fn check_tables(&self) -> Result<(), NoMesh> {
+        let bad = |what: &str| Err(NoMesh(format!("bad table: {what}")));
+        let cells = self.start.len().saturating_sub(2);
+        let k = |c: usize| (self.start[c + 1] - self.start[c]) as usize;
+        if self.start.len() < 2 || self.start[0] != 0 || self.start[1] != 0 || self.start[cells + 1] as usize != self.corner.len() {
+            return bad("start");
+        }
+        if self.link.len() != self.corner.len() || self.edge_wall.len() != self.corner.len() {
+            return bad("lengths");
+        }
+        for c in 1..=cells {
+            if self.start[c + 1] < self.start[c] || !(3..=MAX_CORNERS).contains(&k(c)) {
+                return bad("corners");
+            }
+        }
+        for (g, &link) in self.link.iter().enumerate() {
+            let nb = (link & LINK_CELL) as usize;
+            if nb > cells || (nb != 0 && ((link >> LINK_BACK) & 15) as usize >= k(nb)) {
+                return bad("link");
+            }
+            if link & LINK_WALL != 0 {
+                let Some(&[w0, w1]) = self.edge_walls.get(self.edge_wall[g] as usize) else {
+                    return bad("edge_wall");
+                };
+                if w0 > w1 || w1 as usize > self.wall_ids.len() {
+                    return bad("edge_walls");
+                }
+            }
+        }
+        if self.wall_ids.iter().any(|&w| w as usize >= self.segments.len()) {
+            return bad("wall_ids");
+        }
+        if self.grid.iter().any(|&c| c == 0 || c as usize > cells) {
+            return bad("grid");
+        }
+        Ok(())
     }
 
     /// The walls.
@@ -360,11 +404,37 @@ impl ScanMesh {
         self.start.len() - 2
     }
 
-    /// The corners of cell `c` (counter-clockwise), and the index of its first.
+    /// The corners of cell `c` (counter-clockwise), and the index of its first; `c` a cell
+    /// of the tables (the outside, 0, or one a link or the grid leads to).
     #[inline(always)]
     fn corners(&self, c: usize) -> (&[[Real; 2]], usize) {
-        let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
-        (&self.corner[a..b], a)
+        debug_assert!(c + 2 <= self.start.len());
+        // SAFETY: `c + 1 < start.len()` (every cell a link or the grid names, checked by
+        // `check_tables`), and `start` rises to `corner.len()`.
+        unsafe {
+            let (a, b) = (*self.start.get_unchecked(c) as usize, *self.start.get_unchecked(c + 1) as usize);
+            (self.corner.get_unchecked(a..b), a)
+        }
+    }
+
+    /// The link of corner edge `g` (an index into `corner`).
+    #[inline(always)]
+    fn link(&self, g: usize) -> u32 {
+        debug_assert!(g < self.link.len());
+        // SAFETY: `g` is a corner of a cell, below `corner.len() == link.len()` (checked).
+        unsafe { *self.link.get_unchecked(g) }
+    }
+
+    /// The walls on the wall edge `g` (its link has the wall bit).
+    #[inline(always)]
+    fn walls_on(&self, g: usize) -> impl Iterator<Item = (u32, &Segment)> {
+        debug_assert!(self.link[g] & LINK_WALL != 0);
+        // SAFETY: a wall edge's `edge_wall` is an index into `edge_walls`, whose runs lie in
+        // `wall_ids`, whose walls lie in `segments` (all checked by `check_tables`).
+        unsafe {
+            let [w0, w1] = *self.edge_walls.get_unchecked(*self.edge_wall.get_unchecked(g) as usize);
+            self.wall_ids.get_unchecked(w0 as usize..w1 as usize).iter().map(|&w| (w, self.segments.get_unchecked(w as usize)))
+        }
     }
 
     /// The cell holding `s` strictly inside, found by walking from the grid's; `None` on an
@@ -438,6 +508,8 @@ impl Lidar {
         let c = self.config;
         let (ys, yc) = sp.yaw.sin_cos();
         let w = Walker { lidar: self, mesh, s, ys, yc, mask: c.columns as i64 - 1, r2: c.max_range * c.max_range, zs: c.mount.z };
+        // (`Lidar::new` builds the beam tables of `columns` beams, a power of two)
+        debug_assert!(c.columns.is_power_of_two() && self.az_sin.len() == c.columns && self.az_cos.len() == c.columns);
         let n = c.columns as i64;
         let recast = &mut sc.recast;
         recast.clear();
@@ -484,7 +556,8 @@ impl Lidar {
                 let (to, m) = if i1 == e {
                     (win.pv, j1)
                 } else {
-                    let to = w.frame(cs[i1]);
+                    // SAFETY: `i1 < k`, a corner of the cell
+                    let to = w.frame(unsafe { *cs.get_unchecked(i1) });
                     (to, w.split(to, lo, j1, recast))
                 };
                 if let Some(out) = w.edge(at + i, from, to, lo, m, sweeps, &mut stats.walls_swept) {
@@ -505,7 +578,8 @@ impl Lidar {
         // that its loop stays small), and those the walls missed marked for recasting
         let mut missed = false;
         for sw in sweeps.iter() {
-            let seg = &mesh.segments[sw.wall as usize];
+            // SAFETY: a wall on an edge (see `ScanMesh::walls_on`)
+            let seg = unsafe { mesh.segments.get_unchecked(sw.wall as usize) };
             missed |= self.sweep_flat(w.frame(seg.a), w.frame(seg.b), sw.j0 as i64, (sw.j1 - sw.j0) as usize, ranges);
         }
         if missed {
@@ -580,7 +654,8 @@ impl Walker<'_> {
     #[inline(always)]
     fn side(&self, p: [Real; 2], j: i64) -> Real {
         let i = (j & self.mask) as usize;
-        p[0] * self.lidar.az_sin[i] - p[1] * self.lidar.az_cos[i]
+        // SAFETY: the beam tables hold `mask + 1` beams (`Lidar::new`).
+        unsafe { p[0] * *self.lidar.az_sin.get_unchecked(i) - p[1] * *self.lidar.az_cos.get_unchecked(i) }
     }
 
     /// Marks for recasting beams `j - 1` and `j` if they pass within [`NEAR`] of `p`: there
@@ -663,13 +738,10 @@ impl Walker<'_> {
                 return None; // the edge's line is out of range
             }
         }
-        let link = self.mesh.link[g];
+        let link = self.mesh.link(g);
         if link & LINK_WALL != 0 {
-            let w = self.mesh.edge_wall[g];
-            let [w0, w1] = self.mesh.edge_walls[w as usize];
             let mut blocked = false;
-            for &wi in &self.mesh.wall_ids[w0 as usize..w1 as usize] {
-                let seg = &self.mesh.segments[wi as usize];
+            for (wi, seg) in self.mesh.walls_on(g) {
                 if self.zs > seg.height || !seg.faces(self.s) {
                     continue;
                 }
@@ -690,6 +762,41 @@ impl Walker<'_> {
 mod tests {
     use super::*;
     use crate::world::generate::{generate, GeneratorConfig};
+
+    /// The table check the walk's unchecked reads rely on passes on built meshes and names
+    /// each kind of index out of bounds.
+    #[test]
+    fn table_check_finds_indices_out_of_bounds() {
+        let walls = generate(5, &GeneratorConfig::default()).unwrap().scenario.map.segments;
+        let mesh = ScanMesh::new(&walls).unwrap();
+        assert_eq!(mesh.check_tables(), Ok(()));
+        let cells = mesh.cells() as u32;
+        let g = mesh.link.iter().position(|&l| l & LINK_CELL != 0).unwrap();
+        let wall = mesh.link.iter().position(|&l| l & LINK_WALL != 0).unwrap();
+        let mut broken: Vec<(&str, ScanMesh)> = Vec::new();
+        let mut m = mesh.clone();
+        m.link[g] = (m.link[g] & !LINK_CELL) | (cells + 1);
+        broken.push(("link", m));
+        let mut m = mesh.clone();
+        m.link[g] |= 15 << LINK_BACK;
+        broken.push(("link", m));
+        let mut m = mesh.clone();
+        *m.start.last_mut().unwrap() += 1;
+        broken.push(("start", m));
+        let mut m = mesh.clone();
+        m.edge_wall[wall] = m.edge_walls.len() as u32;
+        broken.push(("edge_wall", m));
+        let mut m = mesh.clone();
+        m.wall_ids[0] = walls.len() as u32;
+        broken.push(("wall_ids", m));
+        let mut m = mesh.clone();
+        m.grid[0] = cells + 1;
+        broken.push(("grid", m));
+        for (what, m) in broken {
+            let err = m.check_tables().unwrap_err();
+            assert!(err.0.contains(what), "{what}: {err}");
+        }
+    }
 
     /// Every cell is strictly convex and counter-clockwise, and every link leads to the
     /// neighbour's copy of the same edge, walked the other way; wall edges lie on their walls.
