@@ -626,6 +626,16 @@ impl Lidar {
 /// below the gap between beams.
 const NEAR: Real = 1e-9;
 
+/// Marks beams `i` and `k` (unless [`NONE`]) for recasting: rare, kept out of the walk's loop.
+#[cold]
+#[inline(never)]
+fn mark(recast: &mut Vec<u32>, i: u32, k: u32) {
+    recast.push(i);
+    if k != NONE {
+        recast.push(k);
+    }
+}
+
 /// One scan's walk (see [`Lidar::walk`]).
 struct Walker<'a> {
     lidar: &'a Lidar,
@@ -664,7 +674,7 @@ impl Walker<'_> {
     fn near(&self, p: [Real; 2], j: i64, recast: &mut Vec<u32>) {
         for j in [j - 1, j] {
             if self.side(p, j).abs() <= NEAR {
-                recast.push((j & self.mask) as u32);
+                mark(recast, (j & self.mask) as u32, NONE);
             }
         }
     }
@@ -700,7 +710,7 @@ impl Walker<'_> {
         let (first, last) = (self.side(p, j0), self.side(p, j1 - 1));
         if (first >= 0.0) | (last < 0.0) {
             if (first.abs() <= NEAR) | (last.abs() <= NEAR) {
-                recast.extend([(j0 & self.mask) as u32, ((j1 - 1) & self.mask) as u32]);
+                mark(recast, (j0 & self.mask) as u32, ((j1 - 1) & self.mask) as u32);
             }
             return if first >= 0.0 { j0 } else { j1 };
         }
