@@ -31,7 +31,16 @@ const NONE: u32 = u32::MAX;
 /// Most corners of a cell: triangles merge into convex cells up to this size.
 const MAX_CORNERS: usize = 10;
 /// The cell of a link (see [`ScanMesh::link`]).
-const LINK_CELL: u32 = (1 << 27) - 1;
+const LINK_CELL: u32 = (1 << 25) - 1;
+/// Where a wall link's kind starts (two bits, see [`WHOLE`]).
+const LINK_KIND: u32 = 25;
+/// A wall edge's kind, as its cell sees it: one wall that is the whole edge and faces the
+/// cell, `a → b` along the edge (`WHOLE`) or against it (`WHOLE_BACK`); one wall that is the
+/// whole edge and turns its back to the cell (`BEHIND`: a one-sided wall, which blocks no
+/// beam from that side); or anything else (0: the walls are tested one by one).
+const WHOLE: u32 = 1;
+const WHOLE_BACK: u32 = 2;
+const BEHIND: u32 = 3;
 /// Where a link's back index starts.
 const LINK_BACK: u32 = 27;
 /// A link's wall bit.
@@ -50,12 +59,15 @@ struct Window {
     e: u32,
 }
 
-/// Beams `j0..j1` (columns, unwrapped) stopped by wall `wall` (an index into the walls).
+/// Beams `j0..j1` (columns, unwrapped) stopped by the walls on corner edge `edge`, or, if
+/// `edge` is [`NONE`], by the one wall from `a` to `b` (sensor frame).
 #[derive(Debug, Clone, Copy)]
 struct Sweep {
-    wall: u32,
+    a: [Real; 2],
+    b: [Real; 2],
     j0: i32,
     j1: i32,
+    edge: u32,
 }
 
 /// Why a set of walls has no [`ScanMesh`]; the scans then use the bucket index.
@@ -94,6 +106,8 @@ pub struct ScanMesh {
     grid_origin: [Real; 2],
     grid_cell: Real,
     grid_dims: (usize, usize),
+    /// The lowest wall's top: a sensor no higher sees every wall that faces it.
+    lowest: Real,
 }
 
 /// What the last [`Lidar::scan_mesh_into`] did.
@@ -323,7 +337,19 @@ impl ScanMesh {
                 };
                 let w = slot(x, y);
                 edge_wall.push(w);
-                link.push(nb | back << LINK_BACK | if w != NONE { LINK_WALL } else { 0 });
+                let mut kind = 0;
+                if w != NONE {
+                    let [w0, w1] = edge_walls[w as usize];
+                    let seg = &segments[wall_ids[w0 as usize] as usize];
+                    let (u, v) = (verts[x as usize], verts[y as usize]);
+                    // (the cell lies left of x → y; a one-sided wall faces its right)
+                    if w1 == w0 + 1 && (u, v) == (seg.a, seg.b) {
+                        kind = if seg.one_sided { BEHIND } else { WHOLE };
+                    } else if w1 == w0 + 1 && (u, v) == (seg.b, seg.a) {
+                        kind = WHOLE_BACK;
+                    }
+                }
+                link.push(nb | back << LINK_BACK | if w != NONE { LINK_WALL | kind << LINK_KIND } else { 0 });
             }
             start.push(corner.len() as u32);
         }
@@ -347,7 +373,8 @@ impl ScanMesh {
                 grid.push(cell_of_face[t].max(1));
             }
         }
-        let mesh = Self { segments: segments.to_vec(), start, corner, link, edge_wall, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims };
+        let lowest = segments.iter().map(|s| s.height).fold(Real::INFINITY, Real::min);
+        let mesh = Self { segments: segments.to_vec(), start, corner, link, edge_wall, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims, lowest };
         mesh.check_tables()?;
         Ok(mesh)
     }
@@ -507,7 +534,7 @@ impl Lidar {
         };
         let c = self.config;
         let (ys, yc) = sp.yaw.sin_cos();
-        let w = Walker { lidar: self, mesh, s, ys, yc, mask: c.columns as i64 - 1, r2: c.max_range * c.max_range, zs: c.mount.z };
+        let w = Walker { lidar: self, mesh, s, ys, yc, mask: c.columns as i64 - 1, r2: c.max_range * c.max_range, zs: c.mount.z, low: c.mount.z <= mesh.lowest };
         // (`Lidar::new` builds the beam tables of `columns` beams, a power of two)
         debug_assert!(c.columns.is_power_of_two() && self.az_sin.len() == c.columns && self.az_cos.len() == c.columns);
         let n = c.columns as i64;
@@ -578,9 +605,17 @@ impl Lidar {
         // that its loop stays small), and those the walls missed marked for recasting
         let mut missed = false;
         for sw in sweeps.iter() {
-            // SAFETY: a wall on an edge (see `ScanMesh::walls_on`)
-            let seg = unsafe { mesh.segments.get_unchecked(sw.wall as usize) };
-            missed |= self.sweep_flat(w.frame(seg.a), w.frame(seg.b), sw.j0 as i64, (sw.j1 - sw.j0) as usize, ranges);
+            let (j0, count) = (sw.j0 as i64, (sw.j1 - sw.j0) as usize);
+            if sw.edge == NONE {
+                // (its ends as the walk transformed them, the wall's own)
+                missed |= self.sweep_flat(sw.a, sw.b, j0, count, ranges);
+                continue;
+            }
+            for (_, seg) in mesh.walls_on(sw.edge as usize) {
+                if w.zs <= seg.height && seg.faces(s) {
+                    missed |= self.sweep_flat(w.frame(seg.a), w.frame(seg.b), j0, count, ranges);
+                }
+            }
         }
         if missed {
             // (rare: a beam may also have been missed by one wall of an edge and hit by another)
@@ -650,6 +685,8 @@ struct Walker<'a> {
     r2: Real,
     /// The sensor's height.
     zs: Real,
+    /// Whether the sensor is no higher than the lowest wall (see [`WHOLE`]).
+    low: bool,
 }
 
 impl Walker<'_> {
@@ -750,15 +787,18 @@ impl Walker<'_> {
         }
         let link = self.mesh.link(g);
         if link & LINK_WALL != 0 {
-            let mut blocked = false;
-            for (wi, seg) in self.mesh.walls_on(g) {
-                if self.zs > seg.height || !seg.faces(self.s) {
-                    continue;
+            let kind = (link >> LINK_KIND) & 3;
+            if self.low && kind != 0 {
+                // one wall, the whole edge: it blocks the beams if it faces the cell, as the
+                // sensor, on the cell's side of the edge's line, sees it then
+                if kind != BEHIND {
+                    let (a, b) = if kind == WHOLE { (p, q) } else { (q, p) };
+                    sweeps.push(Sweep { a, b, j0: j0 as i32, j1: j1 as i32, edge: NONE });
+                    *swept += 1;
+                    return None;
                 }
-                blocked = true;
-                sweeps.push(Sweep { wall: wi, j0: j0 as i32, j1: j1 as i32 });
-            }
-            if blocked {
+            } else if self.mesh.walls_on(g).any(|(_, seg)| self.zs <= seg.height && seg.faces(self.s)) {
+                sweeps.push(Sweep { a: p, b: q, j0: j0 as i32, j1: j1 as i32, edge: g as u32 });
                 *swept += 1;
                 return None;
             }
@@ -815,7 +855,7 @@ mod tests {
         let walls = generate(3, &GeneratorConfig::default()).unwrap().scenario.map.segments;
         let mesh = ScanMesh::new(&walls).unwrap();
         assert!(mesh.cells() > 10);
-        let mut merged = 0;
+        let (mut merged, mut kinds) = (0, [0; 4]);
         for c in 1..=mesh.cells() {
             let (cs, at) = mesh.corners(c);
             let k = cs.len();
@@ -837,9 +877,23 @@ mod tests {
                         let s = &walls[w as usize];
                         assert!(s.distance_to_point(p) < 1e-9 && s.distance_to_point(q) < 1e-9);
                     }
+                    // a kind: the one wall, the whole edge, facing the cell (on its left) or not
+                    let kind = (link >> LINK_KIND) & 3;
+                    kinds[kind as usize] += 1;
+                    if kind != 0 {
+                        assert_eq!(w1, w0 + 1, "cell {c} edge {i}");
+                        let s = &walls[mesh.wall_ids[w0 as usize] as usize];
+                        match kind {
+                            WHOLE => assert!((p, q) == (s.a, s.b) && !s.one_sided),
+                            WHOLE_BACK => assert!((p, q) == (s.b, s.a)),
+                            _ => assert!((p, q) == (s.a, s.b) && s.one_sided),
+                        }
+                    }
                 }
             }
         }
         assert!(merged > 0, "no triangles merged");
+        // walls seen from their front and from their back (one-sided)
+        assert!(kinds[WHOLE_BACK as usize] > 0 && kinds[BEHIND as usize] > 0, "{kinds:?}");
     }
 }
