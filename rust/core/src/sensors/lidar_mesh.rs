@@ -93,8 +93,9 @@ pub struct ScanMesh {
     start: Vec<u32>,
     corner: Vec<[Real; 2]>,
     /// Per corner `i` of a cell, for its edge to corner `i + 1`: the cell across it (0: the
-    /// outside) in the low 27 bits, that edge's place among the neighbour's in the next four,
-    /// and whether walls lie on it in the top bit (then `edge_wall` says which).
+    /// outside) in the low 25 bits, the walls' kind as this cell sees them in the next two
+    /// (see [`WHOLE`]), that edge's place among the neighbour's in the next four, and whether
+    /// walls lie on it in the top bit (then `edge_wall` says which).
     link: Vec<u32>,
     /// Per corner edge, the walls on it (an index into `edge_walls`), or [`NONE`].
     edge_wall: Vec<u32>,
@@ -769,8 +770,9 @@ impl Walker<'_> {
     }
 
     /// The beams `j0..j1` crossing the corner edge `g` (see [`ScanMesh::link`]; its ends `p`,
-    /// `q` in the sensor frame, clockwise end first as the sensor sees it): swept if a wall
-    /// there blocks them (counted in `swept`), else the window into the next cell.
+    /// `q` in the sensor frame, clockwise end first as the sensor sees it): listed in `sweeps`
+    /// (swept after the walk) if a wall there blocks them (counted in `swept`), else the window
+    /// into the next cell.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn edge(&self, g: usize, p: [Real; 2], q: [Real; 2], j0: i64, j1: i64, sweeps: &mut Vec<Sweep>, swept: &mut usize) -> Option<Window> {
