@@ -46,9 +46,9 @@ const LINK_BACK: u32 = 27;
 /// A link's wall bit.
 const LINK_WALL: u32 = 1 << 31;
 
-/// Beams `j0..j1` (columns, unwrapped) entering cell `t` through its edge `e`, whose ends
-/// (sensor frame) are `pv` (corner `e`, counter-clockwise as the sensor sees it) and `pu`
-/// (corner `e + 1`).
+/// Beams `j0..j1` (columns, unwrapped) entering cell `t` (as in [`ScanMesh::across`]) through
+/// its edge `e`, whose ends (sensor frame) are `pv` (corner `e`, counter-clockwise as the
+/// sensor sees it) and `pu` (corner `e + 1`).
 #[derive(Debug, Clone, Copy)]
 struct Window {
     pv: [Real; 2],
@@ -99,6 +99,10 @@ pub struct ScanMesh {
     link: Vec<u32>,
     /// Per corner edge, the walls on it (an index into `edge_walls`), or [`NONE`].
     edge_wall: Vec<u32>,
+    /// Per corner edge, the cell across it as its first corner (an index into `corner`)
+    /// times 16 plus its number of corners (0 for the outside): the walk goes on into it
+    /// without reading `start`.
+    across: Vec<u32>,
     /// Per wall edge, the range of its walls in `wall_ids`.
     edge_walls: Vec<[u32; 2]>,
     wall_ids: Vec<u32>,
@@ -374,8 +378,12 @@ impl ScanMesh {
                 grid.push(cell_of_face[t].max(1));
             }
         }
+        if corner.len() >= 1 << 28 {
+            return Err(NoMesh(format!("{} cell corners, too many", corner.len())));
+        }
+        let across = link.iter().map(|&l| across_of(&start, (l & LINK_CELL) as usize)).collect();
         let lowest = segments.iter().map(|s| s.height).fold(Real::INFINITY, Real::min);
-        let mesh = Self { segments: segments.to_vec(), start, corner, link, edge_wall, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims, lowest };
+        let mesh = Self { segments: segments.to_vec(), start, corner, link, edge_wall, across, edge_walls, wall_ids, grid, grid_origin: lo, grid_cell: cell, grid_dims: dims, lowest };
         mesh.check_tables()?;
         Ok(mesh)
     }
@@ -391,7 +399,7 @@ impl ScanMesh {
         if self.start.len() < 2 || self.start[0] != 0 || self.start[1] != 0 || self.start[cells + 1] as usize != self.corner.len() {
             return bad("start");
         }
-        if self.link.len() != self.corner.len() || self.edge_wall.len() != self.corner.len() {
+        if self.link.len() != self.corner.len() || self.edge_wall.len() != self.corner.len() || self.across.len() != self.corner.len() {
             return bad("lengths");
         }
         for c in 1..=cells {
@@ -403,6 +411,9 @@ impl ScanMesh {
             let nb = (link & LINK_CELL) as usize;
             if nb > cells || (nb != 0 && ((link >> LINK_BACK) & 15) as usize >= k(nb)) {
                 return bad("link");
+            }
+            if self.across[g] != across_of(&self.start, nb) {
+                return bad("across");
             }
             if link & LINK_WALL != 0 {
                 let Some(&[w0, w1]) = self.edge_walls.get(self.edge_wall[g] as usize) else {
@@ -443,6 +454,23 @@ impl ScanMesh {
             let (a, b) = (*self.start.get_unchecked(c) as usize, *self.start.get_unchecked(c + 1) as usize);
             (self.corner.get_unchecked(a..b), a)
         }
+    }
+
+    /// The corners of the cell `t` (as in [`ScanMesh::across`]), and the index of its first.
+    #[inline(always)]
+    fn corners_across(&self, t: u32) -> (&[[Real; 2]], usize) {
+        let (at, k) = ((t >> 4) as usize, (t & 15) as usize);
+        debug_assert!(at + k <= self.corner.len());
+        // SAFETY: `t` is an entry of `across`, checked to be a cell's corners (`check_tables`).
+        (unsafe { self.corner.get_unchecked(at..at + k) }, at)
+    }
+
+    /// The cell across corner edge `g` (see [`ScanMesh::across`]).
+    #[inline(always)]
+    fn across(&self, g: usize) -> u32 {
+        debug_assert!(g < self.across.len());
+        // SAFETY: `g` is a corner of a cell, below `corner.len() == across.len()` (checked).
+        unsafe { *self.across.get_unchecked(g) }
     }
 
     /// The link of corner edge `g` (an index into `corner`).
@@ -570,7 +598,7 @@ impl Lidar {
         let mut cur = stack.pop();
         while let Some(win) = cur {
             stats.cells += 1;
-            let (cs, at) = mesh.corners(win.t as usize);
+            let (cs, at) = mesh.corners_across(win.t);
             let k = cs.len();
             let e = win.e as usize;
             // out through the edges from corner e + 1 round to corner e: each takes the beams
@@ -661,6 +689,15 @@ impl Lidar {
 /// wall: far above the rounding of any hit test (about 1e-16 of the distances involved), far
 /// below the gap between beams.
 const NEAR: Real = 1e-9;
+
+/// Cell `c` (an index into `start`) as [`ScanMesh::across`] gives it.
+fn across_of(start: &[u32], c: usize) -> u32 {
+    if c == 0 {
+        0
+    } else {
+        start[c] << 4 | (start[c + 1] - start[c])
+    }
+}
 
 /// Marks beams `i` and `k` (unless [`NONE`]) for recasting: rare, kept out of the walk's loop.
 #[cold]
@@ -806,7 +843,7 @@ impl Walker<'_> {
             }
         }
         let nb = link & LINK_CELL;
-        (nb != 0).then_some(Window { pv: q, pu: p, j0: j0 as i32, j1: j1 as i32, t: nb, e: (link >> LINK_BACK) & 15 })
+        (nb != 0).then_some(Window { pv: q, pu: p, j0: j0 as i32, j1: j1 as i32, t: self.mesh.across(g), e: (link >> LINK_BACK) & 15 })
     }
 }
 
@@ -844,6 +881,9 @@ mod tests {
         let mut m = mesh.clone();
         m.grid[0] = cells + 1;
         broken.push(("grid", m));
+        let mut m = mesh.clone();
+        m.across[g] += 1;
+        broken.push(("across", m));
         for (what, m) in broken {
             let err = m.check_tables().unwrap_err();
             assert!(err.0.contains(what), "{what}: {err}");
