@@ -591,13 +591,14 @@ impl Lidar {
         }
         (p[k], cols[k]) = (p[0], cols[0] + n);
         for i in 0..k {
-            if let Some(next) = w.edge(at + i, p[i], p[i + 1], cols[i], cols[i + 1], sweeps, &mut stats.walls_swept) {
+            if let Some(next) = w.edge(at + i, p[i], p[i + 1], cols[i], cols[i + 1], sweeps) {
                 stack.push(next);
             }
         }
         let mut cur = stack.pop();
+        let mut cells = 0;
         while let Some(win) = cur {
-            stats.cells += 1;
+            cells += 1;
             let (cs, at) = mesh.corners_across(win.t);
             let k = cs.len();
             let e = win.e as usize;
@@ -616,7 +617,7 @@ impl Lidar {
                     let to = w.frame(unsafe { *cs.get_unchecked(i1) });
                     (to, w.split(to, lo, j1, recast))
                 };
-                if let Some(out) = w.edge(at + i, from, to, lo, m, sweeps, &mut stats.walls_swept) {
+                if let Some(out) = w.edge(at + i, from, to, lo, m, sweeps) {
                     match next {
                         None => next = Some(out),
                         Some(_) => stack.push(out),
@@ -660,7 +661,7 @@ impl Lidar {
         // beams through a corner, or missed by the wall they crossed: against every wall
         recast.sort_unstable();
         recast.dedup();
-        stats.beams_recast = recast.len();
+        (stats.cells, stats.walls_swept, stats.beams_recast) = (cells, sweeps.len(), recast.len());
         // (a beam along a wall's line, within rounding, gets from its hit test a quotient of
         // two roundings: a "hit" nearer than the wall itself is no hit, as the other scans,
         // which skip a wall no nearer than the beam's range so far, never see it)
@@ -808,11 +809,9 @@ impl Walker<'_> {
 
     /// The beams `j0..j1` crossing the corner edge `g` (see [`ScanMesh::link`]; its ends `p`,
     /// `q` in the sensor frame, clockwise end first as the sensor sees it): listed in `sweeps`
-    /// (swept after the walk) if a wall there blocks them (counted in `swept`), else the window
-    /// into the next cell.
-    #[allow(clippy::too_many_arguments)]
+    /// (swept after the walk) if a wall there blocks them, else the window into the next cell.
     #[inline(always)]
-    fn edge(&self, g: usize, p: [Real; 2], q: [Real; 2], j0: i64, j1: i64, sweeps: &mut Vec<Sweep>, swept: &mut usize) -> Option<Window> {
+    fn edge(&self, g: usize, p: [Real; 2], q: [Real; 2], j0: i64, j1: i64, sweeps: &mut Vec<Sweep>) -> Option<Window> {
         if j0 >= j1 {
             return None;
         }
@@ -833,12 +832,10 @@ impl Walker<'_> {
                 if kind != BEHIND {
                     let (a, b) = if kind == WHOLE { (p, q) } else { (q, p) };
                     sweeps.push(Sweep { a, b, j0: j0 as i32, j1: j1 as i32, edge: NONE });
-                    *swept += 1;
                     return None;
                 }
             } else if self.mesh.walls_on(g).any(|(_, seg)| self.zs <= seg.height && seg.faces(self.s)) {
                 sweeps.push(Sweep { a: p, b: q, j0: j0 as i32, j1: j1 as i32, edge: g as u32 });
-                *swept += 1;
                 return None;
             }
         }
