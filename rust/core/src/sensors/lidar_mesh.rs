@@ -642,7 +642,7 @@ impl Lidar {
                 continue;
             }
             for (_, seg) in mesh.walls_on(sw.edge as usize) {
-                if w.zs <= seg.height && seg.faces(s) {
+                if w.blocks(seg) {
                     missed |= self.sweep_flat(w.frame(seg.a), w.frame(seg.b), j0, count, ranges);
                 }
             }
@@ -668,10 +668,7 @@ impl Lidar {
         for &i in recast.iter() {
             let i = i as usize;
             let mut best = Real::INFINITY;
-            for seg in &mesh.segments {
-                if w.zs > seg.height || !seg.faces(s) {
-                    continue;
-                }
+            for seg in mesh.segments.iter().filter(|seg| w.blocks(seg)) {
                 let (a, b) = (w.frame(seg.a), w.frame(seg.b));
                 ranges[i] = Real::INFINITY;
                 self.sweep(a, b, seg.height, i as i64, 1, w.zs, -1.0, ranges);
@@ -729,6 +726,13 @@ struct Walker<'a> {
 }
 
 impl Walker<'_> {
+    /// Whether wall `seg` stops the planar ring's beams: it stands higher than the sensor and
+    /// faces it.
+    #[inline(always)]
+    fn blocks(&self, seg: &Segment) -> bool {
+        self.zs <= seg.height && seg.faces(self.s)
+    }
+
     /// The world point `p` in the sensor's frame (as the other scans compute it).
     #[inline(always)]
     fn frame(&self, p: [Real; 2]) -> [Real; 2] {
@@ -834,7 +838,7 @@ impl Walker<'_> {
                     sweeps.push(Sweep { a, b, j0: j0 as i32, j1: j1 as i32, edge: NONE });
                     return None;
                 }
-            } else if self.mesh.walls_on(g).any(|(_, seg)| self.zs <= seg.height && seg.faces(self.s)) {
+            } else if self.mesh.walls_on(g).any(|(_, seg)| self.blocks(seg)) {
                 sweeps.push(Sweep { a: p, b: q, j0: j0 as i32, j1: j1 as i32, edge: g as u32 });
                 return None;
             }
