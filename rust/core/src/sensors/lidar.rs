@@ -738,8 +738,9 @@ mod tests {
                     assert_eq!(bits(&scans[0]), bits(&scans[1]), "{name}: AVX2, {channels} channels, pose {k}");
                     assert_eq!(bits(&scans[0]), bits(&scans[3]), "{name}: eight pieces at once, {channels} channels, pose {k}");
                     if channels == 1 {
-                        // the walk of the triangulation, portable and built for AVX2
-                        for simd in [SimdLevel::Portable, SimdLevel::Avx2] {
+                        // the walk of the triangulation, portable and built for AVX2 and
+                        // AVX-512
+                        for simd in [SimdLevel::Portable, SimdLevel::Avx2, SimdLevel::Avx512].into_iter().filter(|&s| s != SimdLevel::Avx512 || best == SimdLevel::Avx512) {
                             l.simd = simd;
                             let mut s = Scan::default();
                             l.begin_scan(pose, 0.0, &mut s).unwrap();
