@@ -28,6 +28,6 @@ pub use moving::{MovingObstacle, Trajectory};
 pub use preset::{preset, PRESET_NAMES};
 pub use rosmap::{load_ros_map, RosMap, RosMapOptions};
 pub use scenario::Scenario;
-pub use sim::{StepOutcome, World, WorldConfig, SCAN_ALL_WALLS_MAX, SCAN_PROBE_EVERY};
+pub use sim::{StepOutcome, World, WorldConfig, SCAN_ALL_WALLS_MAX, SCAN_PROBE_EVERY, SCAN_PROBE_MAX, SCAN_PROBE_SLOWER};
 pub use grid::{Cell, OccupancyGrid};
 pub use traverse::{footprint_reachability, Footprint, Reachability};

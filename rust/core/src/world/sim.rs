@@ -49,10 +49,20 @@ pub const SCAN_ALL_WALLS_MAX: usize = 128;
 /// Bigger worlds' planar scans go through the bucket index or walk a triangulation of the
 /// walls ([`Lidar::scan_mesh_into`]), the same ranges either way, whichever has lately been
 /// faster on this machine: each scan's time is kept as a running mean per way, the faster
-/// way taken, and the other tried every this many scans. (The walk reads only what the
-/// sensor sees, and wins where it sees far across clutter; the index wins where most walls
-/// in range are near.)
+/// way taken, and the other tried this many scans later. A try that finds the other way
+/// still [`SCAN_PROBE_SLOWER`] times slower or more doubles the wait for the next (up to
+/// [`SCAN_PROBE_MAX`] scans); one that finds it nearer starts again from this many, and so
+/// does the way taken turning [`SCAN_PROBE_SLOWER`] times slower than at the last try (the
+/// other is then tried at once). (The walk
+/// reads only what the sensor sees, and wins where it sees far across clutter; the index wins
+/// where most walls in range are near.)
 pub const SCAN_PROBE_EVERY: u64 = 32;
+/// The most scans between two tries of the slower way (see [`SCAN_PROBE_EVERY`]): at a 10 Hz
+/// scan rate, 25.6 s.
+pub const SCAN_PROBE_MAX: u64 = 256;
+/// How much slower the other way must stay for the tries to thin out (see
+/// [`SCAN_PROBE_EVERY`]).
+pub const SCAN_PROBE_SLOWER: f64 = 1.25;
 
 /// The running mean time of each way to scan a big world (see [`SCAN_PROBE_EVERY`]).
 #[derive(Debug, Clone, Copy, Default)]
@@ -60,6 +70,11 @@ struct ScanChoice {
     /// Nanoseconds per scan, through the index and by the walk (0: not yet timed).
     ns: [f64; 2],
     scans: u64,
+    /// Scans between tries of the slower way, the scan of the next try (0: not set), and the
+    /// mean time of the way taken after the last try.
+    every: u64,
+    next_try: u64,
+    at_try: f64,
 }
 
 impl ScanChoice {
@@ -67,13 +82,24 @@ impl ScanChoice {
     fn walk(&self) -> bool {
         match self.scans {
             0 | 1 => self.scans == 1,
-            k => (self.ns[1] < self.ns[0]) != k.is_multiple_of(SCAN_PROBE_EVERY),
+            k => (self.ns[1] < self.ns[0]) != (k == self.next_try),
         }
     }
 
     fn record(&mut self, walked: bool, ns: f64) {
+        let tried = self.scans >= 2 && self.scans == self.next_try;
         let m = &mut self.ns[walked as usize];
         *m = if *m == 0.0 { ns } else { 0.75 * *m + 0.25 * ns };
+        if self.scans == 1 || tried {
+            // (after the second scan, each way timed once, and after each try)
+            let (tried_ns, other) = (self.ns[walked as usize], self.ns[!walked as usize]);
+            self.every = if tried && tried_ns >= SCAN_PROBE_SLOWER * other { (2 * self.every).min(SCAN_PROBE_MAX) } else { SCAN_PROBE_EVERY };
+            self.next_try = self.scans + self.every;
+            self.at_try = self.ns[0].min(self.ns[1]);
+        } else if self.scans >= 2 && self.ns[walked as usize] > SCAN_PROBE_SLOWER * self.at_try && self.next_try > self.scans + 1 {
+            // the way taken turned slower: the other tried next
+            (self.every, self.next_try) = (SCAN_PROBE_EVERY, self.scans + 1);
+        }
         self.scans += 1;
     }
 }
@@ -472,26 +498,61 @@ mod tests {
         assert!(!Arc::ptr_eq(&mesh, other.mesh.as_ref().unwrap()));
     }
 
-    /// Each way is timed once first, then the faster is taken but for every
-    /// [`SCAN_PROBE_EVERY`]-th scan, which takes the other; a way that turns slower is left.
+    /// The scans at which `ways` (one per scan, whether it walked) took the way that is not
+    /// the one most of `range` took.
+    fn tries(ways: &[bool], range: std::ops::Range<usize>) -> Vec<usize> {
+        let walked = ways[range.clone()].iter().filter(|&&w| w).count();
+        let most = 2 * walked > range.len();
+        range.filter(|&k| ways[k] != most).collect()
+    }
+
+    /// Each way is timed once first, then the faster is taken but for a try of the other
+    /// [`SCAN_PROBE_EVERY`] scans later; while the other stays [`SCAN_PROBE_SLOWER`] times
+    /// slower the tries thin out, doubling the wait up to [`SCAN_PROBE_MAX`]; a way that
+    /// turns slower is left at once, and the tries start again from the shortest wait.
     #[test]
-    fn the_faster_way_to_scan_is_taken_and_the_other_probed() {
+    fn the_faster_way_to_scan_is_taken_and_the_other_tried_ever_less_often() {
         let mut c = ScanChoice::default();
         let mut ways = Vec::new();
-        for k in 0..200u64 {
+        let switch = 3000;
+        for k in 0..6000 {
             let walk = c.walk();
             ways.push(walk);
-            // the walk takes 10 µs, the index 20 µs, until scan 100, then the other way round
-            let fast = if k < 100 { walk } else { !walk };
+            // the walk takes 10 µs, the index 20 µs, until the switch, then the other way round
+            let fast = if k < switch { walk } else { !walk };
             c.record(walk, if fast { 10_000.0 } else { 20_000.0 });
         }
         assert_eq!((ways[0], ways[1]), (false, true));
-        let walked = |r: std::ops::Range<usize>| ways[r].iter().filter(|&&w| w).count();
-        // scans 2..100: walking but at each probe
-        assert_eq!(walked(2..100), 98 - (2..100).filter(|k| (*k as u64).is_multiple_of(SCAN_PROBE_EVERY)).count());
-        // after the switch the next probe of the index finds it faster: the index from then
-        // on, but for the probes of the walk
-        let probe = (100..200).find(|k| (*k as u64).is_multiple_of(SCAN_PROBE_EVERY)).unwrap();
-        assert_eq!(walked(probe + 1..200), (probe + 1..200).filter(|k| (*k as u64).is_multiple_of(SCAN_PROBE_EVERY)).count(), "{:?}", &ways[100..200]);
+        assert!(ways[2..switch].iter().filter(|&&w| w).count() > switch - 2 - 20);
+        // tries of the index 32, 64, 128, 256, 256, ... scans apart
+        let t = tries(&ways, 2..switch);
+        let gaps: Vec<usize> = std::iter::once(t[0] - 1).chain(t.windows(2).map(|w| w[1] - w[0])).collect();
+        assert_eq!(&gaps[..6], &[32, 64, 128, 256, 256, 256], "{t:?}");
+        assert!(gaps.iter().all(|&g| g <= SCAN_PROBE_MAX as usize));
+        // after the switch the walk's mean rises: the index is tried within two scans, and
+        // taken from the first try after which its mean is the lesser (the means move a
+        // quarter of the way to each new time); then tries of the walk, again from 32 apart
+        assert!(!ways[switch + 2], "{:?}", &ways[switch..switch + 8]);
+        let taken = (switch..6000).find(|&k| !ways[k] && !ways[k + 1]).unwrap();
+        assert!(taken - switch <= 2 + 32 + 1, "{taken}");
+        let t = tries(&ways, taken..6000);
+        let gaps: Vec<usize> = t.windows(2).map(|w| w[1] - w[0]).collect();
+        assert_eq!(&gaps[..4], &[64, 128, 256, 256], "{t:?}");
+        assert!(t[0] - taken <= 32, "{taken} {t:?}");
+    }
+
+    /// A try that finds the other way about as fast keeps the tries at the shortest wait.
+    #[test]
+    fn ways_about_as_fast_are_tried_every_few_scans() {
+        let mut c = ScanChoice::default();
+        let mut ways = Vec::new();
+        for _ in 0..1000 {
+            let walk = c.walk();
+            ways.push(walk);
+            c.record(walk, if walk { 10_000.0 } else { 11_000.0 });
+        }
+        let t = tries(&ways, 2..1000);
+        assert!(t.windows(2).all(|w| w[1] - w[0] == SCAN_PROBE_EVERY as usize), "{t:?}");
+        assert_eq!(t.len(), (1000 - 2) / SCAN_PROBE_EVERY as usize);
     }
 }
