@@ -53,9 +53,8 @@ pub const SCAN_ALL_WALLS_MAX: usize = 128;
 /// still [`SCAN_PROBE_SLOWER`] times slower or more doubles the wait for the next (up to
 /// [`SCAN_PROBE_MAX`] scans); one that finds it nearer starts again from this many, and so
 /// does the way taken turning [`SCAN_PROBE_SLOWER`] times slower than at the last try (the
-/// other is then tried at once). (The walk
-/// reads only what the sensor sees, and wins where it sees far across clutter; the index wins
-/// where most walls in range are near.)
+/// other is then tried at once). (The walk reads only what the sensor sees, and wins where it
+/// sees far across clutter; the index wins where most walls in range are near.)
 pub const SCAN_PROBE_EVERY: u64 = 32;
 /// The most scans between two tries of the slower way (see [`SCAN_PROBE_EVERY`]): at a 10 Hz
 /// scan rate, 25.6 s.
