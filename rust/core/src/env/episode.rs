@@ -552,7 +552,7 @@ impl Episode {
         Ok(report)
     }
 
-    /// Writes the flat observation (see [`super::observation`]) into `out`.
+    /// Writes the flat observation (laid out as the `env::observation` module says) into `out`.
     pub fn observe(&self, out: &mut [f32]) -> Result<()> {
         let bins = self.config.observation.bins;
         if out.len() != self.config.observation.len() {

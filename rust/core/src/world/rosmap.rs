@@ -230,7 +230,7 @@ pub struct RosMapOptions {
     pub unreachable_walls: bool,
     /// Douglas–Peucker tolerance (cells) of the wall contours: the staircase of cell edges
     /// that a wall drawn at an angle leaves in the image becomes a straight wall within this
-    /// many cells of it (see [`simplify_walls`](super::simplify_walls)). 0 keeps every cell edge.
+    /// many cells of it (see [`super::simplify_walls`]). 0 keeps every cell edge.
     pub simplify: Real,
 }
 

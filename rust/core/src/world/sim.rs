@@ -238,7 +238,7 @@ impl World {
         Ok(w)
     }
 
-    /// A world of the named preset (see [`super::preset`]).
+    /// A world of the named preset (see [`super::preset()`]).
     pub fn from_preset(name: &str, config: WorldConfig) -> Result<Self> {
         Self::new(preset(name)?, config)
     }
