@@ -483,13 +483,13 @@ impl ScanMesh {
 
     /// The walls on the wall edge `g` (its link has the wall bit).
     #[inline(always)]
-    fn walls_on(&self, g: usize) -> impl Iterator<Item = (u32, &Segment)> {
+    fn walls_on(&self, g: usize) -> impl Iterator<Item = &Segment> {
         debug_assert!(self.link[g] & LINK_WALL != 0);
         // SAFETY: a wall edge's `edge_wall` is an index into `edge_walls`, whose runs lie in
         // `wall_ids`, whose walls lie in `segments` (all checked by `check_tables`).
         unsafe {
             let [w0, w1] = *self.edge_walls.get_unchecked(*self.edge_wall.get_unchecked(g) as usize);
-            self.wall_ids.get_unchecked(w0 as usize..w1 as usize).iter().map(|&w| (w, self.segments.get_unchecked(w as usize)))
+            self.wall_ids.get_unchecked(w0 as usize..w1 as usize).iter().map(|&w| self.segments.get_unchecked(w as usize))
         }
     }
 
@@ -652,7 +652,7 @@ impl Lidar {
                 missed |= self.sweep_flat(sw.a, sw.b, j0, count, ranges);
                 continue;
             }
-            for (_, seg) in mesh.walls_on(sw.edge as usize) {
+            for seg in mesh.walls_on(sw.edge as usize) {
                 if w.blocks(seg) {
                     missed |= self.sweep_flat(w.frame(seg.a), w.frame(seg.b), j0, count, ranges);
                 }
@@ -849,7 +849,7 @@ impl Walker<'_> {
                     sweeps.push(Sweep { a, b, j0: j0 as i32, j1: j1 as i32, edge: NONE });
                     return None;
                 }
-            } else if self.mesh.walls_on(g).any(|(_, seg)| self.blocks(seg)) {
+            } else if self.mesh.walls_on(g).any(|seg| self.blocks(seg)) {
                 sweeps.push(Sweep { a: p, b: q, j0: j0 as i32, j1: j1 as i32, edge: g as u32 });
                 return None;
             }
