@@ -175,6 +175,10 @@ def test_errors_name_what_is_wrong(tmp_path):
     scen.write_text('{"walls": [], "start": {"x": 0, "y": 0}}')
     with pytest.raises(ValueError, match=r"s.json: line 1"):
         World(scenario=str(scen))
+    yaml_scen = tmp_path / "s.yaml"
+    yaml_scen.write_text("walls:\n  - {a: [0, 0], b: [1, 0], height: 1}\n")
+    with pytest.raises(ValueError, match=r"s.yaml: line 1: a scenario file is one JSON object"):
+        World(scenario=str(yaml_scen))
     w = World(preset="odometry_jump")
     with pytest.raises(ValueError, match="command"):
         w.step(float("nan"), 0.0, 0.0)

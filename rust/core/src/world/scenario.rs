@@ -118,6 +118,13 @@ impl Scenario {
 
     /// Parses the JSON scenario format above; `path` only names the source in errors.
     pub fn from_json_str(text: &str, path: &str) -> Result<Self> {
+        if let Some((k, line)) = text.lines().enumerate().find(|(_, l)| !l.trim().is_empty()) {
+            if !line.trim_start().starts_with('{') {
+                // (most often a YAML file: the ROS maps' own files are YAML)
+                let shown: String = line.trim().chars().take(40).collect();
+                return Err(Error::map_file(path, format!("line {}", k + 1), format!("a scenario file is one JSON object, `{{ ... }}` (docs/world.md, \"Scenario file\"), not `{shown}`")));
+            }
+        }
         let f: ScenarioFile = serde_json::from_str(text)
             .map_err(|e| Error::map_file(path, format!("line {} column {}", e.line(), e.column()), e.to_string()))?;
         let mut map = StaticMap::new();
@@ -191,6 +198,12 @@ mod tests {
     fn syntax_error_names_file_and_line() {
         let err = Scenario::from_json_str("{\n \"walls\": [,\n}", "bad.json").unwrap_err().to_string();
         assert!(err.starts_with("bad.json: line 2"), "{err}");
+    }
+
+    #[test]
+    fn yaml_is_named_as_not_json() {
+        let err = Scenario::from_json_str("\n# my corridor\nwalls:\n  - {a: [0, 0], b: [1, 0]}\n", "s.yaml").unwrap_err().to_string();
+        assert!(err.starts_with("s.yaml: line 2") && err.contains("one JSON object") && err.contains("`# my corridor`"), "{err}");
     }
 
     #[test]
