@@ -304,6 +304,50 @@ fn walls_that_cross_are_split_where_they_cross() {
     assert!(ScanMesh::new(&t).unwrap().cells() > 0);
 }
 
+/// Thin walls outlined both ways (two one-sided walls on one line, as a map's one-cell-thick
+/// obstacles are), two-sided walls given twice, and a two-sided wall with a one-sided one
+/// on it: the walk takes each edge's wall facing the sensor and still gives the full scan's
+/// ranges bit for bit (a sensor below every wall's top, and one above some).
+#[test]
+fn walls_on_one_line_give_the_full_scan_bit_for_bit() {
+    use shieldnav_core::sensors::ScanMesh;
+    use shieldnav_core::world::SegmentIndex;
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut walked = 0;
+    for round in 0..4 {
+        // one wall a cell of a 3 m grid, so that none crosses another, in one of four forms
+        let mut walls = Vec::new();
+        for i in 0..6 {
+            for j in 0..6 {
+                let o = [i as f64 * 3.0, j as f64 * 3.0];
+                let a = [o[0] + rng.random_range(0.2..2.8), o[1] + rng.random_range(0.2..2.8)];
+                let b = [o[0] + rng.random_range(0.2..2.8), o[1] + rng.random_range(0.2..2.8)];
+                let h = if round % 2 == 1 { rng.random_range(0.3..2.0) } else { 2.0 };
+                match rng.random_range(0..4) {
+                    0 => walls.extend([Segment::one_sided(a, b, h), Segment::one_sided(b, a, h)]),
+                    1 => walls.extend([Segment::new(a, b, h), Segment::new(b, a, h)]),
+                    2 => walls.extend([Segment::new(a, b, h), Segment::one_sided(b, a, h)]),
+                    _ => walls.push(Segment::one_sided(a, b, h)),
+                }
+            }
+        }
+        let mesh = ScanMesh::new(&walls).unwrap();
+        let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        let mut lidar = Lidar::new(exact(1, 1024)).unwrap();
+        let (mut a, mut b) = (Scan::default(), Scan::default());
+        for _ in 0..30 {
+            let p = Pose2::new(rng.random_range(0.0..18.0), rng.random_range(0.0..18.0), rng.random_range(-3.2..3.2));
+            lidar.scan_into(&[&walls], p, 0.0, &mut rng, &mut a).unwrap();
+            lidar.scan_mesh_into(&mesh, &index, &[], p, 0.0, &mut rng, &mut b).unwrap();
+            let diff: Vec<_> = (0..1024).filter(|&i| a.ranges[i].to_bits() != b.ranges[i].to_bits()).map(|i| (i, a.ranges[i], b.ranges[i])).collect();
+            assert!(diff.is_empty(), "round {round} pose {p:?}: {diff:?}");
+            let st = lidar.last_mesh_stats();
+            walked += !st.fell_back as usize;
+        }
+    }
+    assert!(walked > 110, "walked {walked}");
+}
+
 #[test]
 fn one_sided_grid_walls_give_the_two_sided_reference_ranges_in_free_space() {
     use shieldnav_core::world::generate::{generate, GeneratorConfig, SiteKind};

@@ -34,10 +34,11 @@ const MAX_CORNERS: usize = 10;
 const LINK_CELL: u32 = (1 << 25) - 1;
 /// Where a wall link's kind starts (two bits, see [`WHOLE`]).
 const LINK_KIND: u32 = 25;
-/// A wall edge's kind, as its cell sees it: one wall that is the whole edge and faces the
-/// cell, `a → b` along the edge (`WHOLE`) or against it (`WHOLE_BACK`); one wall that is the
-/// whole edge and turns its back to the cell (`BEHIND`: a one-sided wall, which blocks no
-/// beam from that side); or anything else (0: the walls are tested one by one).
+/// A wall edge's kind, as its cell sees it, where every wall on it is the whole edge: one
+/// wall (or copies of one) faces the cell, `a → b` along the edge (`WHOLE`) or against it
+/// (`WHOLE_BACK`), and any other turns its back to it (a one-sided wall, which blocks no beam
+/// from that side: a thin obstacle outlined both ways is one wall facing each side); none
+/// faces the cell (`BEHIND`); or anything else (0: the walls are tested one by one).
 const WHOLE: u32 = 1;
 const WHOLE_BACK: u32 = 2;
 const BEHIND: u32 = 3;
@@ -345,14 +346,8 @@ impl ScanMesh {
                 let mut kind = 0;
                 if w != NONE {
                     let [w0, w1] = edge_walls[w as usize];
-                    let seg = &segments[wall_ids[w0 as usize] as usize];
-                    let (u, v) = (verts[x as usize], verts[y as usize]);
-                    // (the cell lies left of x → y; a one-sided wall faces its right)
-                    if w1 == w0 + 1 && (u, v) == (seg.a, seg.b) {
-                        kind = if seg.one_sided { BEHIND } else { WHOLE };
-                    } else if w1 == w0 + 1 && (u, v) == (seg.b, seg.a) {
-                        kind = WHOLE_BACK;
-                    }
+                    let walls = wall_ids[w0 as usize..w1 as usize].iter().map(|&k| &segments[k as usize]);
+                    kind = whole_kind(walls, verts[x as usize], verts[y as usize]);
                 }
                 link.push(nb | back << LINK_BACK | if w != NONE { LINK_WALL | kind << LINK_KIND } else { 0 });
             }
@@ -699,6 +694,34 @@ impl Lidar {
 /// below the gap between beams.
 const NEAR: Real = 1e-9;
 
+/// The kind (see [`WHOLE`]) of the corner edge `u → v` of a cell (which lies on its left)
+/// as that cell sees the `walls` on it: if every one of them is the whole edge, and those that
+/// face the cell (two-sided, or one-sided running `v → u`: a one-sided wall faces its right)
+/// are one wall (or copies of one), [`WHOLE`] or [`WHOLE_BACK`] by its direction; if none
+/// faces the cell, [`BEHIND`]; else 0. (A thin obstacle of a map is outlined both ways: two
+/// one-sided walls on one edge, one facing each side.)
+fn whole_kind<'a>(walls: impl Iterator<Item = &'a Segment>, u: [Real; 2], v: [Real; 2]) -> u32 {
+    let mut facing: Option<([Real; 2], [Real; 2])> = None;
+    for seg in walls {
+        let ends = (seg.a, seg.b);
+        if ends != (u, v) && ends != (v, u) {
+            return 0;
+        }
+        if seg.one_sided && ends == (u, v) {
+            continue;
+        }
+        if facing.is_some_and(|f| f != ends) {
+            return 0;
+        }
+        facing = Some(ends);
+    }
+    match facing {
+        None => BEHIND,
+        Some(ends) if ends == (u, v) => WHOLE,
+        Some(_) => WHOLE_BACK,
+    }
+}
+
 /// Cell `c` (an index into `start`) as [`ScanMesh::across`] gives it.
 fn across_of(start: &[u32], c: usize) -> u32 {
     if c == 0 {
@@ -931,16 +954,18 @@ mod tests {
                         let s = &walls[w as usize];
                         assert!(s.distance_to_point(p) < 1e-9 && s.distance_to_point(q) < 1e-9);
                     }
-                    // a kind: the one wall, the whole edge, facing the cell (on its left) or not
+                    // a kind: walls that are the whole edge, of which those facing the cell
+                    // (on its left) all run p → q, or all q → p, or there are none
                     let kind = (link >> LINK_KIND) & 3;
                     kinds[kind as usize] += 1;
                     if kind != 0 {
-                        assert_eq!(w1, w0 + 1, "cell {c} edge {i}");
-                        let s = &walls[mesh.wall_ids[w0 as usize] as usize];
+                        let on: Vec<&Segment> = mesh.wall_ids[w0 as usize..w1 as usize].iter().map(|&w| &walls[w as usize]).collect();
+                        assert!(on.iter().all(|s| (s.a, s.b) == (p, q) || (s.a, s.b) == (q, p)), "cell {c} edge {i}");
+                        let facing: Vec<_> = on.iter().filter(|s| !s.one_sided || (s.a, s.b) == (q, p)).map(|s| (s.a, s.b)).collect();
                         match kind {
-                            WHOLE => assert!((p, q) == (s.a, s.b) && !s.one_sided),
-                            WHOLE_BACK => assert!((p, q) == (s.b, s.a)),
-                            _ => assert!((p, q) == (s.a, s.b) && s.one_sided),
+                            WHOLE => assert!(!facing.is_empty() && facing.iter().all(|&e| e == (p, q))),
+                            WHOLE_BACK => assert!(!facing.is_empty() && facing.iter().all(|&e| e == (q, p))),
+                            _ => assert!(facing.is_empty()),
                         }
                     }
                 }
@@ -949,5 +974,40 @@ mod tests {
         assert!(merged > 0, "no triangles merged");
         // walls seen from their front and from their back (one-sided)
         assert!(kinds[WHOLE_BACK as usize] > 0 && kinds[BEHIND as usize] > 0, "{kinds:?}");
+    }
+
+    /// An edge's kind as each of its two cells sees it: a thin wall outlined both ways (two
+    /// one-sided walls) blocks from either side as the wall facing it; a two-sided wall given
+    /// twice is one wall; a one-sided wall seen from behind blocks nothing; a two-sided wall
+    /// and a one-sided one facing the same cell are tested one by one.
+    #[test]
+    fn edge_kinds_as_each_side_sees_them() {
+        let (a, b) = ([1.0, 1.0], [3.0, 1.5]);
+        let kinds_of = |walls: &[Segment]| {
+            let mut all = walls.to_vec();
+            all.extend([Segment::new([0.0, 0.0], [4.0, 0.0], 1.0), Segment::new([4.0, 0.0], [4.0, 3.0], 1.0), Segment::new([4.0, 3.0], [0.0, 3.0], 1.0), Segment::new([0.0, 3.0], [0.0, 0.0], 1.0)]);
+            let mesh = ScanMesh::new(&all).unwrap();
+            // (the kind from the cell on the left of a → b, then from the one on its right)
+            let mut seen = [None, None];
+            for c in 1..=mesh.cells() {
+                let (cs, at) = mesh.corners(c);
+                for i in 0..cs.len() {
+                    let (p, q) = (cs[i], cs[(i + 1) % cs.len()]);
+                    let kind = (mesh.link[at + i] >> LINK_KIND) & 3;
+                    if (p, q) == (a, b) {
+                        seen[0] = Some(kind);
+                    } else if (p, q) == (b, a) {
+                        seen[1] = Some(kind);
+                    }
+                }
+            }
+            [seen[0].unwrap(), seen[1].unwrap()]
+        };
+        assert_eq!(kinds_of(&[Segment::new(a, b, 1.0)]), [WHOLE, WHOLE_BACK]);
+        assert_eq!(kinds_of(&[Segment::one_sided(a, b, 1.0)]), [BEHIND, WHOLE_BACK]);
+        assert_eq!(kinds_of(&[Segment::one_sided(a, b, 1.0), Segment::one_sided(b, a, 1.0)]), [WHOLE_BACK, WHOLE_BACK]);
+        assert_eq!(kinds_of(&[Segment::new(b, a, 1.0), Segment::new(b, a, 1.0)]), [WHOLE_BACK, WHOLE]);
+        assert_eq!(kinds_of(&[Segment::one_sided(a, b, 1.0), Segment::one_sided(a, b, 2.0)]), [BEHIND, WHOLE_BACK]);
+        assert_eq!(kinds_of(&[Segment::new(a, b, 1.0), Segment::one_sided(b, a, 1.0)]), [0, WHOLE_BACK]);
     }
 }
