@@ -643,6 +643,19 @@ impl Lidar {
             // on through one side at once, the others later
             cur = next.or_else(|| stack.pop());
         }
+        stats.cells = cells;
+        self.sweep_walked(&w, ranges, sc);
+        true
+    }
+
+    /// After the walk: the beams of each wall edge reached, with its walls' exact hits, and
+    /// the beams through a corner or missed cast again against every wall (out of the walk's
+    /// function, so that the code after it does not change how its loop is built: with the
+    /// small sweeps' code inside it, the loop ran 6–9 % slower on `ut_gdc_floor2`).
+    #[inline(never)]
+    fn sweep_walked(&self, w: &Walker, ranges: &mut [Real], sc: &mut MeshScratch) {
+        let mesh = w.mesh;
+        let (sweeps, recast) = (&sc.sweeps, &mut sc.recast);
         // the beams of each wall edge reached, with its walls' exact hits (after the walk, so
         // that its loop stays small), and those the walls missed marked for recasting
         // (with AVX-512 the sweeps of a few beams first, eight beams at once; the others listed
@@ -691,7 +704,7 @@ impl Lidar {
         // beams through a corner, or missed by the wall they crossed: against every wall
         recast.sort_unstable();
         recast.dedup();
-        (stats.cells, stats.walls_swept, stats.beams_recast) = (cells, sweeps.len(), recast.len());
+        (sc.stats.walls_swept, sc.stats.beams_recast) = (sweeps.len(), recast.len());
         // (a beam along a wall's line, within rounding, gets from its hit test a quotient of
         // two roundings: a "hit" nearer than the wall itself is no hit, as the other scans,
         // which skip a wall no nearer than the beam's range so far, never see it)
@@ -709,7 +722,6 @@ impl Lidar {
             }
             ranges[i] = best;
         }
-        true
     }
 }
 
