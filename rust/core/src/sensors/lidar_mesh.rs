@@ -644,15 +644,47 @@ impl Lidar {
             cur = next.or_else(|| stack.pop());
         }
         stats.cells = cells;
-        self.sweep_walked(&w, ranges, sc);
+        match self.simd {
+            // SAFETY: `simd` is found from the CPU: it runs these instructions.
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx512 => unsafe { self.sweep_walked_avx512(&w, ranges, sc) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx2 => unsafe { self.sweep_walked_avx2(&w, ranges, sc) },
+            _ => self.sweep_walked_portable(&w, ranges, sc),
+        }
         true
+    }
+
+    /// [`Lidar::sweep_walked`] built for AVX-512 (the same ranges).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq")]
+    #[inline(never)]
+    fn sweep_walked_avx512(&self, w: &Walker, ranges: &mut [Real], sc: &mut MeshScratch) {
+        self.sweep_walked(w, ranges, sc);
+    }
+
+    /// [`Lidar::sweep_walked`] built for AVX2 and FMA (the same ranges: no fused multiply-add
+    /// is asked for).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    fn sweep_walked_avx2(&self, w: &Walker, ranges: &mut [Real], sc: &mut MeshScratch) {
+        self.sweep_walked(w, ranges, sc);
+    }
+
+    /// [`Lidar::sweep_walked`] for any CPU.
+    #[inline(never)]
+    fn sweep_walked_portable(&self, w: &Walker, ranges: &mut [Real], sc: &mut MeshScratch) {
+        self.sweep_walked(w, ranges, sc);
     }
 
     /// After the walk: the beams of each wall edge reached, with its walls' exact hits, and
     /// the beams through a corner or missed cast again against every wall (out of the walk's
     /// function, so that the code after it does not change how its loop is built: with the
-    /// small sweeps' code inside it, the loop ran 6–9 % slower on `ut_gdc_floor2`).
-    #[inline(never)]
+    /// small sweeps' code inside it, the loop ran 6–9 % slower on `ut_gdc_floor2`; built for
+    /// the CPU as the walk is, so that the sweep of each wall is inlined).
+    #[inline(always)]
     fn sweep_walked(&self, w: &Walker, ranges: &mut [Real], sc: &mut MeshScratch) {
         let mesh = w.mesh;
         let (sweeps, recast) = (&sc.sweeps, &mut sc.recast);
