@@ -760,8 +760,8 @@ impl Lidar {
 /// The sweeps of at most [`SMALL`] beams of a whole wall (`edge` [`NONE`]) in `sweeps`, eight
 /// beams at once (the same test and quotient as [`Lidar::sweep_flat`]; the walls loaded whole
 /// and transposed, the beams' directions and ranges gathered by index, the ranges scattered
-/// back: the sweeps' beams are distinct), the others listed in `big` (their indices); returns whether one of the
-/// beams has no range after them. On the atrium of `ut_gdc_floor2` at 20 m, where 201 of a
+/// back: the sweeps' beams are distinct), the others listed in `big` (their indices); returns
+/// whether one of the beams has no range after them. On the atrium of `ut_gdc_floor2` at 20 m, where 201 of a
 /// scan's 303 sweeps are of one or two beams, a scan took 4 % less than with each swept alone.
 ///
 /// `mask` is the columns less one (a power of two less one), `cos`, `sin` and `best` hold a
@@ -772,7 +772,7 @@ fn small_sweeps_avx512(sweeps: &[Sweep], jobs: &mut Vec<[u32; 2]>, big: &mut Vec
     use std::arch::x86_64::*;
     // the jobs (a beam and its sweep's record, six `f64`s a record), written without branches:
     // every sweep writes SMALL jobs, kept by its count if it is small, and its index in `big`,
-    // kept if not (the eight spare jobs, or old ones, are masked off)
+    // kept if not (the eight jobs after the last are of sweep 0 and beam 0: read, masked off)
     let need = SMALL * sweeps.len() + 8;
     if jobs.len() < need {
         jobs.resize(need, [0, 0]);
@@ -795,7 +795,6 @@ fn small_sweeps_avx512(sweeps: &[Sweep], jobs: &mut Vec<[u32; 2]>, big: &mut Vec
         nb += !small as usize;
     }
     big.truncate(nb);
-    // (the eight jobs after the last: sweep 0, beam 0, masked off but read)
     // SAFETY: `k + 8 <= need`
     unsafe { std::ptr::write_bytes(jobs.as_mut_ptr().add(k), 0, 8) };
     let base = sweeps.as_ptr() as *const Real;
@@ -815,7 +814,8 @@ fn small_sweeps_avx512(sweeps: &[Sweep], jobs: &mut Vec<[u32; 2]>, big: &mut Vec
             let wall = |o: usize| _mm256_loadu_pd(base.add((*job.add(o))[0] as usize));
             let two = |o: usize| _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(wall(o)), wall(o + 1));
             let (z0, z1, z2, z3) = (two(0), two(2), two(4), two(6));
-            // (x = a0 or a1 of walls 0 2 | b0 or b1 of 0 2 | the same of 1 3, then of 4 6, 5 7)
+            // (x0: a0 of walls 0 2, b0 of 0 2, a0 of 1 3, b0 of 1 3; x1 the same of walls 4 to
+            // 7; y0, y1 the same of a1 and b1)
             let (x0, x1) = (_mm512_unpacklo_pd(z0, z1), _mm512_unpacklo_pd(z2, z3));
             let (y0, y1) = (_mm512_unpackhi_pd(z0, z1), _mm512_unpackhi_pd(z2, z3));
             let (first, second) = (_mm512_set_epi64(13, 9, 12, 8, 5, 1, 4, 0), _mm512_set_epi64(15, 11, 14, 10, 7, 3, 6, 2));
