@@ -650,13 +650,20 @@ pub(super) fn max(a: Real, b: Real) -> Real {
 /// branches, so that the two end points of a wall are computed side by side.
 #[inline]
 pub(super) fn fast_atan2(y: Real, x: Real) -> Real {
+    atan2_by(y, x, |n, d| n / d)
+}
+
+/// [`fast_atan2`] with `quotient(n, d)` for the one division `n / d` (`0 <= n <= d`, `d > 0`):
+/// a quotient within a relative `e` of it moves the angle by at most `e` rad more.
+#[inline(always)]
+pub(super) fn atan2_by(y: Real, x: Real, quotient: impl Fn(Real, Real) -> Real) -> Real {
     use std::f64::consts::{FRAC_PI_2, PI};
     let (ax, ay) = (x.abs(), y.abs());
     let steep = ay > ax;
     // (as selects, one instruction each: `f64::min` and `max` would also order NaNs)
     let (mn, mx) = if steep { (ax, ay) } else { (ay, ax) };
     // 0 at the origin (0 / MIN_POSITIVE)
-    let q = mn / max(mx, Real::MIN_POSITIVE);
+    let q = quotient(mn, max(mx, Real::MIN_POSITIVE));
     let s = q * q;
     let mut r = ((0.020_845_09 * s - 0.085_156_31) * s + 0.180_159_28) * s - 0.330_304_79;
     r = (r * s + 0.999_866_33) * q;
