@@ -1209,6 +1209,16 @@ mod tests {
         assert_eq!(kinds_of(&[Segment::new(a, b, 1.0), Segment::one_sided(b, a, 1.0)]), [0, WHOLE_BACK]);
     }
 
+    /// Whether this CPU runs AVX-512 (else the test says it is skipped).
+    #[cfg(target_arch = "x86_64")]
+    fn runs_avx512() -> bool {
+        let yes = SimdLevel::detect() == SimdLevel::Avx512;
+        if !yes {
+            eprintln!("SKIPPED: no AVX-512 on this CPU");
+        }
+        yes
+    }
+
     /// The sweeps of a few beams taken eight beams at once give each sweep's own ranges (and
     /// whether a beam is left without one), bit for bit: walls across their beams, walls some
     /// beams miss, walls along beam 0 (parallel to it, the beam on or beside the wall's line),
@@ -1218,8 +1228,7 @@ mod tests {
     #[test]
     fn small_sweeps_equal_each_sweep_alone() {
         use rand::{Rng, SeedableRng};
-        if SimdLevel::detect() != SimdLevel::Avx512 {
-            eprintln!("SKIPPED: no AVX-512 on this CPU");
+        if !runs_avx512() {
             return;
         }
         let lidar = Lidar::new(crate::sensors::LidarConfig { columns: 1024, range_noise_std: 0.0, ..Default::default() }).unwrap();
@@ -1278,8 +1287,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn reciprocal_angle_is_within_its_bound() {
-        if SimdLevel::detect() != SimdLevel::Avx512 {
-            eprintln!("SKIPPED: no AVX-512 on this CPU");
+        if !runs_avx512() {
             return;
         }
         let (mut worst, mut worst_div): (Real, Real) = (0.0, 0.0);
