@@ -473,12 +473,7 @@ impl Lidar {
             missed = false;
             for k in 0..count {
                 let i = (i0 + k) & (n - 1);
-                let (dc, ds) = (self.az_cos[i], self.az_sin[i]);
-                if dc * e[1] - ds * e[0] == 0.0 {
-                    if let Some(t) = ray_segment_distance([0.0, 0.0], [dc, ds], a, b) {
-                        best[i] = best[i].min(t);
-                    }
-                }
+                best[i] = parallel_beam(a, b, self.az_cos[i], self.az_sin[i], best[i]);
                 missed |= best[i] == Real::INFINITY;
             }
         }
@@ -576,6 +571,18 @@ fn flat_beam(a: [Real; 2], e: [Real; 2], ae: Real, dc: Real, ds: Real, cur: Real
     let hit = (den > 0.0) & (ae >= 0.0) & (sn >= 0.0) & (sn <= den) | (den < 0.0) & (ae <= 0.0) & (sn <= 0.0) & (sn >= den);
     let t = ae / den;
     (if hit & (t < cur) { t } else { cur }, den == 0.0)
+}
+
+/// The nearest range of beam `(dc, ds)` so far, `cur`, after the general hit test against the
+/// wall `a b` if the beam is parallel to it (which the division-free test of
+/// [`Lidar::sweep_flat`] and its vector kernels leave unchanged); `cur` if not parallel.
+#[inline]
+pub(super) fn parallel_beam(a: [Real; 2], b: [Real; 2], dc: Real, ds: Real, cur: Real) -> Real {
+    let e = [b[0] - a[0], b[1] - a[1]];
+    if dc * e[1] - ds * e[0] != 0.0 {
+        return cur;
+    }
+    ray_segment_distance([0.0, 0.0], [dc, ds], a, b).map_or(cur, |t| cur.min(t))
 }
 
 /// Distance from the origin to the segment `a b`.

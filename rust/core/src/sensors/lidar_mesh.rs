@@ -20,7 +20,7 @@ use std::collections::HashMap;
 use spade::handles::FixedVertexHandle;
 use spade::{ConstrainedDelaunayTriangulation, PositionInTriangulation, Triangulation};
 
-use super::lidar::{atan2_by, fast_atan2, iceil, seg_origin_distance, Lidar, Scan};
+use super::lidar::{atan2_by, fast_atan2, iceil, parallel_beam, seg_origin_distance, Lidar, Scan};
 use crate::math::Real;
 use crate::simd::SimdLevel;
 use crate::world::{cross2, sub2, Pose2, Segment};
@@ -696,18 +696,16 @@ impl Lidar {
         // in `big`)
         let mut missed = false;
         let big = &mut sc.big;
+        #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
+        let mut batched = false;
         #[cfg(target_arch = "x86_64")]
-        let batched = self.simd == SimdLevel::Avx512 && sweeps.len() < 1 << 24;
-        #[cfg(not(target_arch = "x86_64"))]
-        let batched = false;
-        if batched {
+        if self.simd == SimdLevel::Avx512 && sweeps.len() < 1 << 24 {
             // SAFETY: the CPU runs AVX-512 (`simd`); under 2^24 sweeps (indices times six
             // within an `i32`)
-            #[cfg(target_arch = "x86_64")]
-            {
-                missed = unsafe { small_sweeps_avx512(sweeps, &mut sc.jobs, big, w.mask, &self.az_cos, &self.az_sin, ranges) };
-            }
-        } else {
+            missed = unsafe { small_sweeps_avx512(sweeps, &mut sc.jobs, big, w.mask, &self.az_cos, &self.az_sin, ranges) };
+            batched = true;
+        }
+        if !batched {
             big.clear();
             big.extend(0..sweeps.len() as u32);
         }
@@ -844,15 +842,8 @@ fn small_sweeps_avx512(sweeps: &[Sweep], jobs: &mut Vec<[u32; 2]>, big: &mut Vec
         // a beam parallel to its wall (rare): the general test
         missed = 0;
         for &[id, i] in &jobs[..k] {
-            let sw = &sweeps[id as usize / 6];
-            let i = i as usize;
-            let e = sub2(sw.b, sw.a);
-            let (dc, ds) = (cos[i], sin[i]);
-            if dc * e[1] - ds * e[0] == 0.0 {
-                if let Some(t) = super::ray_segment::ray_segment_distance([0.0, 0.0], [dc, ds], sw.a, sw.b) {
-                    best[i] = best[i].min(t);
-                }
-            }
+            let (sw, i) = (&sweeps[id as usize / 6], i as usize);
+            best[i] = parallel_beam(sw.a, sw.b, cos[i], sin[i], best[i]);
             missed |= (best[i] == Real::INFINITY) as u8;
         }
     }

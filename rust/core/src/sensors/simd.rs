@@ -1,6 +1,7 @@
-//! The LIDAR's one kernel written with vector instructions by hand: a planar wall's sweep
-//! over aligned blocks of four beams (the rest of its AVX2 and AVX-512 builds is the portable
-//! code, vectorised by the compiler; see [`crate::simd::SimdLevel`]).
+//! The LIDAR's kernel written with vector instructions by hand for every wall: a planar wall's
+//! sweep over aligned blocks of four beams (the rest of its AVX2 and AVX-512 builds is the
+//! portable code, vectorised by the compiler; see [`crate::simd::SimdLevel`]). The walk's
+//! AVX-512 batch of short sweeps, which reads the walk's own records, is in `lidar_mesh`.
 
 use crate::math::Real;
 
