@@ -4,8 +4,8 @@ loop (the policy's command is filtered during training, ``--shield composite``) 
 
 Training runs on the native Rust batch (``shieldnav.sb3.ShieldnavVecEnv``, no subprocesses).
 An evaluation callback runs deterministic episodes on a separate environment and logs return,
-episodes with contact, deadlock rate and coverage; checkpoints and TensorBoard logs go to the
-run folder, and ``model.zip`` is what ``python -m agents.benchmark --policy`` loads.
+episodes with contact, deadlock rate and coverage; checkpoints and TensorBoard logs (or, without
+TensorBoard, ``progress.csv``) go to the run folder, and ``model.zip`` is what ``python -m agents.benchmark --policy`` loads.
 
     python -m agents.train --algo ppo --env shieldnav/CorridorInspection-v0 --shield composite \\
         --timesteps 200000 --num-envs 8 --seed 0 --out runs/ppo_composite
@@ -28,6 +28,7 @@ try:
     import torch
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback, CallbackList, CheckpointCallback
+    from stable_baselines3.common.logger import configure as configure_logger
     from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 except ImportError as err:  # pragma: no cover
     raise ImportError('training needs stable-baselines3 and torch: pip install "shieldnav[train]"') from err
@@ -103,12 +104,16 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
     Algo = ALGOS[algo]
     params: dict[str, Any] = {"n_steps": 256, "batch_size": 256} if algo == "ppo" else {"learning_starts": 1000}
     model = Algo("MlpPolicy", venv, seed=seed, device="cpu", tensorboard_log=tb, verbose=0, **params)
+    if tb is None:
+        # SB3 would otherwise log to a new folder under the system's temp folder on every run
+        model.set_logger(configure_logger(str(out), ["csv"]))
     eval_kwargs = {"shield": shield, **env_kwargs}
     if max_episode_steps is not None:
         eval_kwargs["max_episode_steps"] = eval_kwargs["time_limit"] = max_episode_steps
     evaluator = EvalSafety(env_id, eval_every, eval_episodes, seed + 10_000, eval_kwargs)
     checkpoints = CheckpointCallback(save_freq=max(eval_every // num_envs, 1), save_path=str(out / "checkpoints"), name_prefix=algo)
     model.learn(timesteps, callback=CallbackList([evaluator, checkpoints]), progress_bar=progress, tb_log_name=f"{algo}_{shield}")
+    model.logger.close()  # flushes and closes the log files
     path = out / "model.zip"
     model.save(path)
     meta = {"algo": algo, "env_id": env_id, "shield": shield, "timesteps": timesteps, "num_envs": num_envs, "seed": seed,

@@ -23,6 +23,8 @@ def test_ppo_trains_saves_reloads_and_is_benchmarked_identically_twice(tmp_path)
             "--out", str(tmp_path / run), "--no-progress", "--no-tensorboard",
         ])
         assert path.exists() and (tmp_path / run / "checkpoints").is_dir()
+        logged = (tmp_path / run / "progress.csv").read_text().splitlines()
+        assert "eval/coverage" in logged[0].split(",") and len(logged) > 1, "no log in the run folder"
         meta = json.loads((tmp_path / run / "run.json").read_text())
         assert [e["timesteps"] for e in meta["eval"]] == [1024, 2048]
         rows.append(benchmark.main([

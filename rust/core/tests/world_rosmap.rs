@@ -247,10 +247,25 @@ fn simplified_walls_stay_within_the_tolerance_and_keep_contours_closed() {
     }
 }
 
-fn temp_dir(tag: &str) -> PathBuf {
+/// A scratch folder, removed when dropped (also when the test fails).
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn join(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn temp_dir(tag: &str) -> TempDir {
     let d = std::env::temp_dir().join(format!("shieldnav_rosmap_{tag}_{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TempDir(d)
 }
 
 #[test]
@@ -292,6 +307,9 @@ fn malformed_files_name_file_and_field() {
     assert!(e.contains("c.yaml: field resolution"), "{e}");
     let e = load_ros_map(d.join("nope.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
     assert!(e.contains("nope.yaml: file"), "{e}");
+    let folder = d.0.clone();
+    drop(d);
+    assert!(!folder.exists(), "the scratch folder {} is left behind", folder.display());
 }
 
 #[test]
