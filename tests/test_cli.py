@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from importlib.metadata import entry_points
 
 import numpy as np
@@ -16,6 +18,13 @@ from shieldnav.cli import main
 def test_console_script_points_at_main():
     (ep,) = [e for e in entry_points(group="console_scripts") if e.name == "shieldnav"]
     assert ep.load() is main
+
+
+def test_python_dash_m_runs_the_same_command_line():
+    done = subprocess.run([sys.executable, "-m", "shieldnav", "run", "shieldnav/NoSuchScenario-v0"], capture_output=True, text=True)
+    assert done.returncode == 2 and "shieldnav: error:" in done.stderr and "NoSuchScenario" in done.stderr, done.stderr
+    done = subprocess.run([sys.executable, "-m", "shieldnav", "info"], capture_output=True, text=True)
+    assert done.returncode == 0 and "shieldnav/ConstrictedPassage-v0" in done.stdout, done.stderr
 
 
 def test_info_lists_every_id_and_the_papers_defaults(capsys):

@@ -3,6 +3,9 @@ and the paper's three scenario outcomes with the scripted inspection agent."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -38,6 +41,13 @@ def rollout(env_id: str, seed: int, steps: int | None = None, policy: str = "age
     summary = env.unwrapped.episode.summary()
     env.close()
     return observations, rewards, infos, dict(info, summary=summary)
+
+
+def test_module_colon_id_loads_the_package_first():
+    # a fresh interpreter that never imports shieldnav itself
+    code = "import gymnasium as gym; e = gym.make('shieldnav:shieldnav/ConstrictedPassage-v0'); print(e.reset(seed=0)[0].shape)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.strip() == "(73,)", done.stderr
 
 
 @pytest.mark.parametrize("env_id", ALL_IDS)
