@@ -1,5 +1,6 @@
 """shieldnav.World: LIDAR against an independent numpy ray caster, poses, contacts, errors."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -193,6 +194,19 @@ def test_scenario_file_round_trip(tmp_path):
     w = World(scenario=str(scen), range_noise_std=0.0)
     assert w.name == "mine"
     assert w.ranges[0, 256] == pytest.approx(1.0, abs=1e-12)  # +y wall, 1 m away
+
+
+def test_the_documented_scenario_file_loads_and_runs(tmp_path):
+    # the example of docs/world.md, as a user copies it
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "world.md").read_text()
+    (example,) = re.findall(r"```json\n(.*?)```", doc, flags=re.S)
+    scen = tmp_path / "mine.json"
+    scen.write_text(example)
+    w = World(scenario=str(scen), range_noise_std=0.0)
+    assert w.name == "my_corridor"
+    while w.time < 20.1:  # standing still: the odometry jumps 120 m at 20 s
+        w.step(0.0, 0.0, 0.0)
+    assert w.estimated_pose[0] - w.true_pose[0] == pytest.approx(120.0, abs=1e-6)
 
 
 def test_scan_poses_and_contacts_are_live_read_only_views_without_copies():
