@@ -167,6 +167,13 @@ def test_bad_actions_and_arguments_raise_named_errors():
         gym.make("shieldnav/ConstrictedPassage-v0", lidar_bins=2)
     with pytest.raises(shieldnav.MapFileError):
         gym.make("shieldnav/MapInspection-v0", map_path="/nonexistent/map.yaml")
+    # the keyword the user passed is named, not the core's field behind it
+    for key, value in [("robot_length", 0.0), ("lidar_noise_std", -1.0), ("yaw_accel_max", -1.0), ("tracker_tau", -1.0),
+                       ("lidar_columns", 3), ("lidar_mount", (0.0, 0.0, float("nan"), 0.0)), ("lidar_max_range", -1.0)]:
+        with pytest.raises(InvalidArgumentError, match=f"invalid `{key}`"):
+            gym.make("shieldnav/ConstrictedPassage-v0", **{key: value})
+    with pytest.raises(InvalidArgumentError, match="invalid `robot_width`"):
+        gym.make_vec("shieldnav/ConstrictedPassage-v0", num_envs=2, vectorization_mode="vector_entry_point", robot_width=-1.0)
 
 
 def test_map_walls_are_simplified_by_default_and_on_request():

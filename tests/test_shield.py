@@ -253,6 +253,8 @@ def test_points_are_read_without_copy_and_not_modified(rng):
         ({"u_max": (1.0, -1.0)}, "u_max"),
         ({"method": "cbf"}, "method"),
         ({"angular_bins": 1}, "angular_bins"),
+        ({"angular_bins": 10**12}, "angular_bins"),  # (asked for 16 TB and aborted the process)
+        ({"semi_axes": (1e-300, 1e-300)}, "semi_axes"),  # (1/a² overflowed: NaN blamed on the points)
     ],
 )
 def test_bad_constructor_arguments_raise_value_error_naming_them(kwargs, name):

@@ -168,6 +168,8 @@ def test_errors_name_what_is_wrong(tmp_path):
         World(preset="odometry_jump", columns=1000)
     with pytest.raises(ValueError, match="dropout"):
         World(preset="odometry_jump", dropout=1.5)
+    with pytest.raises(ValueError, match="invalid `robot_length`"):
+        World(preset="odometry_jump", robot_length=0.0)
     bad = tmp_path / "bad.yaml"
     bad.write_text("image: x.pgm\nresolution: fine\norigin: [0, 0, 0]\n")
     with pytest.raises(ValueError, match=r"bad.yaml: line 2, field resolution"):

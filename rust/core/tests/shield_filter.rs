@@ -236,6 +236,12 @@ fn bad_inputs_are_errors_naming_the_argument() {
     bad(ShieldConfig { semi_axes: vec![0.9, 0.0], ..ShieldConfig::default() }, "semi_axes");
     bad(ShieldConfig { u_max: Some(vec![1.0]), ..ShieldConfig::default() }, "u_max");
     bad(ShieldConfig { scan: ScanFilter { crop_radius: Some(-1.0), ..ScanFilter::default() }, ..ShieldConfig::default() }, "crop_radius");
+    // (a tiny semi-axis made 1/a² infinite and every h NaN, blamed on the points)
+    bad(ShieldConfig { semi_axes: vec![1e-300, 1e-300], ..ShieldConfig::default() }, "semi_axes");
+    bad(ShieldConfig { semi_axes: vec![0.9, 0.45, 2e3], ..ShieldConfig::default() }, "semi_axes");
+    // (10^12 bins asked for 16 TB and aborted the process)
+    bad(ShieldConfig { scan: ScanFilter { angular_bins: Some(1_000_000_000_000), ..ScanFilter::default() }, ..ShieldConfig::default() }, "angular_bins");
+    bad(ShieldConfig { scan: ScanFilter { angular_bins: Some(8193), ..ScanFilter::default() }, ..ShieldConfig::default() }, "angular_bins");
     let mut s = shield(ShieldMethod::Composite);
     let st = BodyState::planar(0.0, 0.0).unwrap();
     let pts = [1.0, 1.0];
@@ -248,6 +254,42 @@ fn bad_inputs_are_errors_naming_the_argument() {
     assert!(s3.filter(&scan, &st, &[1.0, 0.0, 0.0]).unwrap_err().to_string().contains("points"));
     assert!(BodyState::spatial([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 1.0]], [0.0; 3]).is_err());
     assert!(Scan::new_f64(&[1.0, 2.0, 3.0], 2).is_err());
+}
+
+/// The most bins in 3D (8 192 × 4 096, binned in a hash map rather than an array) keep the
+/// point of least `h` of each occupied bin, as a direct count finds them.
+#[test]
+fn the_most_angular_bins_in_3d_keep_the_nearest_point_of_each_bin() {
+    let mut g = rng(29);
+    let pts = random_scan(&mut g, 20_000, 3, 3.0);
+    let cfg = ShieldConfig { semi_axes: vec![0.9, 0.45, 0.3], scan: ScanFilter { angular_bins: Some(8192), ..ScanFilter::default() }, ..ShieldConfig::default() };
+    let mut s = Shield::new(cfg).unwrap();
+    let st = BodyState::spatial([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [0.0; 3]).unwrap();
+    let o = s.filter(&Scan::new_f64(&pts, 3).unwrap(), &st, &[0.5, 0.0, 0.0]).unwrap();
+    let (bins, el_bins) = (8192.0, 4096.0);
+    let mut occupied = std::collections::HashSet::new();
+    for c in pts.chunks(3).filter(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() <= 3.5) {
+        let az = (c[1].atan2(c[0]) + std::f64::consts::PI) / std::f64::consts::TAU;
+        let el = c[2].atan2(c[0].hypot(c[1])) / std::f64::consts::PI + 0.5;
+        occupied.insert((((az * bins) as usize).min(8191), ((el * el_bins) as usize).min(4095)));
+    }
+    assert_eq!(o.num_points, occupied.len());
+    let all = Shield::new(ShieldConfig { semi_axes: vec![0.9, 0.45, 0.3], ..ShieldConfig::default() }).unwrap().filter(&Scan::new_f64(&pts, 3).unwrap(), &st, &[0.5, 0.0, 0.0]).unwrap();
+    assert!(o.num_points < all.num_points && o.h_min == all.h_min, "{} of {}", o.num_points, all.num_points);
+}
+
+/// A point at the robot's centre violates the distance row with no direction to help: the
+/// baseline stops, as the composite does with a vanishing gradient (it drove on at full speed).
+#[test]
+fn distance_baseline_stops_for_a_point_at_the_centre() {
+    let st = BodyState::planar(0.0, 0.0).unwrap();
+    for pts in [vec![0.0, 0.0], vec![0.0, 0.0, 2.0, 0.0]] {
+        let o = shield(ShieldMethod::Distance).filter(&Scan::new_f64(&pts, 2).unwrap(), &st, &[1.0, 0.0]).unwrap();
+        assert_eq!((o.u, o.feasible, o.active), ([0.0; 3], false, true), "{pts:?}");
+    }
+    // a point just off the centre has a direction to help: the command moves away from it
+    let o = shield(ShieldMethod::Distance).filter(&Scan::new_f64(&[0.1, 0.0], 2).unwrap(), &st, &[1.0, 0.0]).unwrap();
+    assert!(o.active && o.u[0] < 0.0, "{o:?}");
 }
 
 #[test]

@@ -50,7 +50,7 @@ impl PyBatch {
                 let site = args.load(&opts)?;
                 Batch::new(site, config, &seeds, mode, threads)
             })
-            .map_err(to_py)?;
+            .map_err(crate::config::keyed)?;
         Ok(Self { outcomes: vec![SlotOutcome::default(); num_envs], inner })
     }
 

@@ -132,6 +132,31 @@ pub fn known_keys() -> Vec<&'static str> {
     keys
 }
 
+/// A core error as a Python exception, a field of the configuration named by its keyword
+/// here (`length` → `robot_length`, `alpha_max` → `yaw_accel_max`, ...); a core name shared
+/// by several keywords is left as it is.
+pub fn keyed(err: shieldnav_core::Error) -> PyErr {
+    let shieldnav_core::Error::InvalidArgument { name, reason } = &err else {
+        return crate::errors::to_py(err);
+    };
+    let (mut key, mut count) = ("", 0);
+    macro_rules! pair {
+        ($key:literal, $($path:ident).+) => {
+            if stringify!($($path).+).rsplit('.').next().map(str::trim) == Some(*name) {
+                (key, count) = ($key, count + 1);
+            }
+        };
+    }
+    each_field!(pair);
+    if *name == "mount" {
+        (key, count) = ("lidar_mount", 1);
+    }
+    if count == 1 && key != *name {
+        return invalid(key, reason);
+    }
+    crate::errors::to_py(err)
+}
+
 /// Site options that live outside `EpisodeConfig`.
 pub struct SiteOptions {
     pub generator: GeneratorConfig,
@@ -225,8 +250,8 @@ pub fn episode_config(
         }
         site.ros_map.simplify = t;
     }
-    c.world.lidar.validate().map_err(crate::errors::to_py)?;
-    c.world.robot.validate().map_err(crate::errors::to_py)?;
+    c.world.lidar.validate().map_err(keyed)?;
+    c.world.robot.validate().map_err(keyed)?;
     site.generator.footprint = shieldnav_core::world::Footprint {
         length: c.world.robot.length,
         width: c.world.robot.width,

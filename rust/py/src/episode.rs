@@ -128,7 +128,7 @@ impl PyEpisode {
                 let site = args.load(&opts)?;
                 Episode::new(site, config, seed)
             })
-            .map_err(to_py)?;
+            .map_err(crate::config::keyed)?;
         Ok(Self { inner })
     }
 

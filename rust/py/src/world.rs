@@ -20,7 +20,8 @@ use shieldnav_core::sensors::{LidarConfig, LidarMount};
 use shieldnav_core::world::generate::{GeneratorConfig, SiteKind};
 use shieldnav_core::world::{RosMapOptions, World, WorldConfig};
 
-use crate::errors::{to_py, InvalidArgumentError};
+use crate::errors::{invalid, to_py, InvalidArgumentError};
+use shieldnav_core::Error;
 
 /// A read-only numpy array over `data`, which `owner` holds.
 ///
@@ -159,7 +160,12 @@ impl PyWorld {
                     World::from_scenario_file(scenario.unwrap_or_default(), config)
                 }
             })
-            .map_err(to_py)?;
+            .map_err(|e| match e {
+                // (the robot's fields as this constructor's keywords name them)
+                Error::InvalidArgument { name: "length", reason } => invalid("robot_length", reason),
+                Error::InvalidArgument { name: "width", reason } => invalid("robot_width", reason),
+                e => to_py(e),
+            })?;
         let views = Views::new(&world);
         Ok(Self { inner: world, views })
     }

@@ -15,6 +15,11 @@
 use crate::error::{Error, Result};
 use crate::math::{cross, dot, mat_mul, mat_t_vec, mat_vec, skew, Mat3, Real, Vec3};
 
+/// Least and greatest semi-axis (m): `1/a²` and the points' `pᵀ A p` stay far from
+/// overflow and underflow in both the f64 and the f32 kernels.
+pub const MIN_SEMI_AXIS: Real = 1e-3;
+pub const MAX_SEMI_AXIS: Real = 1e3;
+
 /// An axis-aligned ellipsoid in the body frame, centred on the robot: planar (`a_x, a_y`) or
 /// 3D (`a_x, a_y, a_z`), semi-axes in metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,8 +42,8 @@ impl Envelope {
         if dim != 2 && dim != 3 {
             return Err(Error::invalid("semi_axes", format!("expected 2 (planar) or 3 (3D) values, got {dim}")));
         }
-        if let Some(a) = semi_axes.iter().find(|a| !(a.is_finite() && **a > 0.0)) {
-            return Err(Error::invalid("semi_axes", format!("every semi-axis must be finite and > 0, got {a}")));
+        if let Some(a) = semi_axes.iter().find(|a| !(MIN_SEMI_AXIS..=MAX_SEMI_AXIS).contains(*a)) {
+            return Err(Error::invalid("semi_axes", format!("every semi-axis must be from {MIN_SEMI_AXIS} to {MAX_SEMI_AXIS} m, got {a}")));
         }
         let mut axes = [1.0; 3];
         axes[..dim].copy_from_slice(semi_axes);

@@ -418,13 +418,15 @@ impl Shield {
                 let n = pts.len() / dim;
                 let sd2 = self.config.safety_distance * self.config.safety_distance;
                 self.rows.clear();
-                let (mut h_min, mut g_near) = (f64::MAX, [0.0; 3]);
+                let (mut h_min, mut g_near, mut stuck) = (f64::MAX, [0.0; 3], false);
                 for i in 0..n {
                     let p = &pts[i * dim..(i + 1) * dim];
                     let d = to_world(&[p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]);
                     let h = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - sd2;
                     let g = [-2.0 * d[0], -2.0 * d[1], -2.0 * d[2]];
                     self.rows.push(&g[..dim], -alpha * h);
+                    // a violated row no direction helps (a point at the robot's centre)
+                    stuck |= -alpha * h > 0.0 && (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt() <= self.config.grad_eps;
                     if h < h_min {
                         (h_min, g_near) = (h, g);
                     }
@@ -432,7 +434,8 @@ impl Shield {
                 if let Some(e) = extra {
                     self.rows.extend(e);
                 }
-                let sol = solve_rows(u_nom, &self.rows, u_max.as_deref())?;
+                // stop, as the composite does with a vanishing gradient (see `qp`)
+                let sol = if stuck { QpSolution { u: [0.0; 3], active: true, feasible: false } } else { solve_rows(u_nom, &self.rows, u_max.as_deref())? };
                 (h_min, h_min, g_near, 0.0, n, sol)
             }
         };

@@ -23,9 +23,17 @@ pub struct ScanFilter {
     pub height_band: Option<(f64, f64)>,
     /// Keep one point per cubic (square, when planar) voxel of this edge (m).
     pub voxel_size: Option<f64>,
-    /// Keep one point per azimuth bin (and, in 3D, per elevation bin of the same width).
+    /// Keep one point per azimuth bin (and, in 3D, per elevation bin of the same width); at
+    /// most [`MAX_ANGULAR_BINS`].
     pub angular_bins: Option<usize>,
 }
+
+/// Most azimuth bins of [`ScanFilter::angular_bins`] (four times the columns of the densest
+/// Ouster scan; more would keep every point of any scan).
+pub const MAX_ANGULAR_BINS: usize = 8192;
+
+/// Most bins held in one array (16 bytes each); a 3D scan with more is binned in a hash map.
+const DENSE_BINS: usize = 1 << 18;
 
 impl Default for ScanFilter {
     fn default() -> Self {
@@ -52,8 +60,8 @@ impl ScanFilter {
             }
         }
         if let Some(b) = self.angular_bins {
-            if b < 4 {
-                return Err(Error::invalid("angular_bins", format!("must be at least 4 (or None), got {b}")));
+            if !(4..=MAX_ANGULAR_BINS).contains(&b) {
+                return Err(Error::invalid("angular_bins", format!("must be from 4 to {MAX_ANGULAR_BINS} (or None), got {b}")));
             }
         }
         Ok(())
@@ -101,8 +109,11 @@ pub fn select_points<T: Lane>(
     let h_of = |p: &[f64; 3]| envelope.h_body(&[p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]);
     if let Some(bins) = filter.angular_bins {
         let el_bins = if dim == 3 { (bins / 2).max(1) } else { 1 };
+        let dense = bins * el_bins <= DENSE_BINS;
         scratch.bins.clear();
-        scratch.bins.resize(bins * el_bins, (f64::INFINITY, usize::MAX));
+        if dense {
+            scratch.bins.resize(bins * el_bins, (f64::INFINITY, usize::MAX));
+        }
         let tau = std::f64::consts::TAU;
         for i in 0..n {
             let p = point(i);
@@ -118,12 +129,19 @@ pub fn select_points<T: Lane>(
                 0
             };
             let h = h_of(&p);
-            let slot = &mut scratch.bins[e * bins + a];
+            let slot = if dense { &mut scratch.bins[e * bins + a] } else { scratch.cells.entry((a as i64, e as i64, 0)).or_insert((f64::INFINITY, usize::MAX)) };
             if h < slot.0 {
                 *slot = (h, i);
             }
         }
-        scratch.kept.extend(scratch.bins.iter().filter(|s| s.1 != usize::MAX).map(|s| s.1));
+        if dense {
+            scratch.kept.extend(scratch.bins.iter().filter(|s| s.1 != usize::MAX).map(|s| s.1));
+        } else {
+            // (in the dense array's order: by bin)
+            let mut held: Vec<_> = scratch.cells.iter().map(|(&(a, e, _), s)| (e * bins as i64 + a, s.1)).collect();
+            held.sort_unstable();
+            scratch.kept.extend(held.into_iter().map(|(_, i)| i));
+        }
     } else if let Some(v) = filter.voxel_size {
         for i in 0..n {
             let p = point(i);
