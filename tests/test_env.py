@@ -148,6 +148,24 @@ def test_step_applies_the_shield_to_the_current_scan():
         assert info["intervention"] == pytest.approx(np.hypot(*(info["u_filtered"][:2] - info["u_nom"][:2])))
 
 
+def test_record_episode_statistics_wraps_the_env_and_the_summary_stays():
+    # Gymnasium's wrapper owns info["episode"] (it asserted on ours); time_limit ends the episode itself
+    env = gym.wrappers.RecordEpisodeStatistics(gym.make("shieldnav/ConstrictedPassage-v0", time_limit=7))
+    env.reset(seed=0)
+    for k in range(7):
+        _, _, terminated, truncated, info = env.step(np.zeros(3, np.float32))
+    assert truncated and not terminated
+    assert info["episode"]["l"] == 7 and info["shieldnav_episode"]["steps"] == 7
+    vec = gym.wrappers.vector.RecordEpisodeStatistics(
+        gym.make_vec("shieldnav/ConstrictedPassage-v0", num_envs=2, vectorization_mode="vector_entry_point", max_episode_steps=5))
+    vec.reset(seed=0)
+    for k in range(5):
+        _, _, _, truncated, info = vec.step(np.zeros((2, 3), np.float32))
+    assert truncated.all() and list(info["episode"]["l"]) == [5, 5]
+    assert list(info["shieldnav_episode"]["steps"]) == [5, 5] and info["_shieldnav_episode"].all()
+    vec.close()
+
+
 def test_bad_actions_and_arguments_raise_named_errors():
     env = gym.make("shieldnav/ConstrictedPassage-v0")
     env.reset(seed=0)
@@ -233,10 +251,10 @@ def test_dict_observation_drives_the_agent_like_the_flat_one():
 
 def test_scenario1_distance_shield_deadlocks_before_the_gap_composite_passes():
     *_, composite = rollout("shieldnav/ConstrictedPassage-v0", seed=0, shield="composite")
-    e = composite["episode"]
+    e = composite["shieldnav_episode"]
     assert e["success"] and e["collisions"] == 0 and not e["deadlock"]
     *_, distance = rollout("shieldnav/ConstrictedPassage-v0", seed=0, shield="distance", truncate_on_deadlock=True)
-    e = distance["episode"]
+    e = distance["shieldnav_episode"]
     assert e["deadlock"] and not e["success"] and e["collisions"] == 0
     # stuck with its centre before the gap (cabinet and doorway span x 4.2 - 5.1)
     assert distance["time"] < 20.0
@@ -247,19 +265,19 @@ def test_scenario2_odometry_jump_unshielded_hits_the_wall_shielded_goes_on():
     first_contact = next(i["time"] for i in infos if i["cost"] > 0)
     assert 20.0 <= first_contact < 23.0, "the jump at 20 s sends the unshielded robot into the wall"
     _, _, infos, comp = rollout("shieldnav/OdometryJump-v0", seed=0, shield="composite")
-    assert comp["episode"]["collisions"] == 0
+    assert comp["shieldnav_episode"]["collisions"] == 0
     assert max(i["odometry_error"] for i in infos) > 100.0
     after = [i for i in infos if i["time"] > 20.0]
-    assert after[-1]["time"] > 45.0 and comp["episode"]["path_length"] > 30.0
+    assert after[-1]["time"] > 45.0 and comp["shieldnav_episode"]["path_length"] > 30.0
 
 
 def test_scenario3_moving_chair_and_door_composite_zero_contacts_none_collides():
     _, _, infos, comp = rollout("shieldnav/DynamicObstacles-v0", seed=0, shield="composite")
-    e = comp["episode"]
+    e = comp["shieldnav_episode"]
     assert e["collisions"] == 0 and e["success"], e
     assert e["time"] > 22.0, "it met the door swinging open from 20 s to 22 s"
     *_, none = rollout("shieldnav/DynamicObstacles-v0", seed=0, shield="none")
-    assert none["episode"]["collisions"] > 0
+    assert none["shieldnav_episode"]["collisions"] > 0
 
 
 @pytest.mark.expensive

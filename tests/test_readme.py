@@ -23,7 +23,7 @@ def test_readme_block_runs(k):
         assert namespace["out"].num_points == 3 and namespace["out"].u[0] < 1.0
         assert namespace["out3"].num_points == 1 and namespace["out3"].u.shape == (3,)
     if "agent" in namespace:  # the scripted agent's episode of Scenario 1 ends without contact
-        episode = namespace["info"]["episode"]
+        episode = namespace["info"]["shieldnav_episode"]
         assert episode["collisions"] == 0 and episode["steps"] > 100, episode
     if "vec" in namespace:
         assert namespace["obs"].shape[0] == 64

@@ -64,7 +64,7 @@ def test_scripted_agent_inspects_procedural_sites_under_the_composite_shield():
             obs, _, terminated, truncated, info = env.step(agent.act(obs, info))
             if terminated or truncated:
                 break
-        s = info["episode"]
+        s = info["shieldnav_episode"]
         coverage.append(s["coverage"])
         contacts += s["collisions"]
         if s["coverage"] < 0.02:

@@ -55,9 +55,9 @@ def test_make_vec_gives_the_native_batch_equal_to_single_envs(env_id):
             o, rr, tte, ttr = ref[k][i]
             assert obs[i].tobytes() == o.tobytes(), (k, i)
             assert r[i] == rr and te[i] == tte and tr[i] == ttr, (k, i)
-        if "episode" in info:
-            ends += int(info["_episode"].sum())
-            assert np.all(info["episode"]["steps"][info["_episode"]] == limit)
+        if "shieldnav_episode" in info:
+            ends += int(info["_shieldnav_episode"].sum())
+            assert np.all(info["shieldnav_episode"]["steps"][info["_shieldnav_episode"]] == limit)
     assert ends == 2 * n, "every sub-environment hit the 60-step limit twice in 130 steps"
 
 

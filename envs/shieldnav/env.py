@@ -74,9 +74,13 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
     ``h_min``, ``shield_active``, ``shield_feasible``, ``intervention``, ``u_nom``,
     ``u_filtered`` (body frame, ``(v_x, v_y, ω)``), ``coverage``, ``new_coverage``,
     ``deadlock``, ``odometry_error``, ``solve_time_ns``, ``num_points``, ``time``; on the last
-    step of an episode also ``episode`` (and ``shieldnav_episode``, the same dict, which SB3's
-    ``Monitor`` does not overwrite): collisions, contact time, deadlock, coverage, path
-    length, time, mean intervention, shield statistics.
+    step of an episode also ``shieldnav_episode``: collisions, contact time, deadlock,
+    coverage, path length, time, mean intervention, shield statistics (``episode`` is left to
+    Gymnasium's ``RecordEpisodeStatistics`` and SB3's ``Monitor``, which write their own). It
+    comes with the episode's own ends: its ``time_limit`` (the registered
+    ``max_episode_steps``), the goal, a deadlock; to shorten episodes pass ``time_limit=N``
+    (``gym.make(..., max_episode_steps=N)`` adds a ``TimeLimit`` wrapper the environment
+    cannot see). ``env.unwrapped.episode.summary()`` gives the totals at any step.
 
     ## Arguments
     ``preset`` / ``procedural`` / ``map_path`` / ``scenario_path``: the site (exactly one).
@@ -184,9 +188,7 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         if not self._report_timing:
             del info["solve_time_ns"]
         if terminated or truncated:
-            summary = self._episode.summary()
-            info["episode"] = summary
-            info["shieldnav_episode"] = summary
+            info["shieldnav_episode"] = self._episode.summary()
         if self.render_mode == "human":
             self.render()
         return self._obs(flat), reward, terminated, truncated, info

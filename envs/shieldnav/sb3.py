@@ -63,7 +63,7 @@ class ShieldnavVecEnv(VecEnv):
             if dones[i]:
                 d["terminal_observation"] = info["final_obs"][i]
                 d["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
-                d["shieldnav_episode"] = {k: v[i].item() for k, v in info["episode"].items()}
+                d["shieldnav_episode"] = {k: v[i].item() for k, v in info["shieldnav_episode"].items()}
             infos.append(d)
         return obs, reward.astype(np.float32), dones, infos
 

@@ -145,8 +145,8 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
             keys = next(iter(ended.values())).keys()
             mask = np.zeros(self.num_envs, bool)
             mask[list(ended)] = True
-            info["episode"] = {k: np.array([ended[i][k] if i in ended else 0 for i in range(self.num_envs)]) for k in keys}
-            info["_episode"] = mask
+            info["shieldnav_episode"] = {k: np.array([ended[i][k] if i in ended else 0 for i in range(self.num_envs)]) for k in keys}
+            info["_shieldnav_episode"] = mask
             if self._mode == "same_step":
                 info["final_obs"] = final_obs
                 info["_final_obs"] = mask
