@@ -148,6 +148,18 @@ def test_step_applies_the_shield_to_the_current_scan():
         assert info["intervention"] == pytest.approx(np.hypot(*(info["u_filtered"][:2] - info["u_nom"][:2])))
 
 
+def test_dict_observation_stays_in_its_space_with_an_offset_mount():
+    # the sensor 0.6 m ahead of the body's centre sees 3 m: body-frame points reach 3.6 m
+    env = gym.make("shieldnav/ConstrictedPassage-v0", observation="dict", lidar_mount=(0.6, 0.3, 0.5, 0.0), lidar_max_range=3.0)
+    obs, _ = env.reset(seed=0)
+    valid = obs["points"][obs["valid"].astype(bool)]
+    assert np.abs(valid[:, 0]).max() > 3.0, "a point beyond the range from the body's centre"
+    assert env.observation_space.contains(obs)
+    for _ in range(20):
+        obs, *_ = env.step(np.array([1.0, 0.0, 0.0], np.float32))
+        assert env.observation_space.contains(obs)
+
+
 def test_record_episode_statistics_wraps_the_env_and_the_summary_stays():
     # Gymnasium's wrapper owns info["episode"] (it asserted on ours); time_limit ends the episode itself
     env = gym.wrappers.RecordEpisodeStatistics(gym.make("shieldnav/ConstrictedPassage-v0", time_limit=7))
@@ -190,6 +202,13 @@ def test_bad_actions_and_arguments_raise_named_errors():
                        ("lidar_columns", 3), ("lidar_mount", (0.0, 0.0, float("nan"), 0.0)), ("lidar_max_range", -1.0)]:
         with pytest.raises(InvalidArgumentError, match=f"invalid `{key}`"):
             gym.make("shieldnav/ConstrictedPassage-v0", **{key: value})
+    # keywords of another kind of site are errors, not silently ignored
+    with pytest.raises(InvalidArgumentError, match="invalid `site_kind`: applies to procedural"):
+        gym.make("shieldnav/ConstrictedPassage-v0", site_kind="tunnel")
+    for key, value in [("simplify", 2.0), ("unknown_is_wall", False), ("unreachable_walls", True)]:
+        with pytest.raises(InvalidArgumentError, match=f"invalid `{key}`: applies to ROS map"):
+            gym.make("shieldnav/CorridorInspection-v0", **{key: value})
+    gym.make("shieldnav/CorridorInspection-v0", site_kind="tunnel").reset(seed=0)
     with pytest.raises(InvalidArgumentError, match="invalid `robot_width`"):
         gym.make_vec("shieldnav/ConstrictedPassage-v0", num_envs=2, vectorization_mode="vector_entry_point", robot_width=-1.0)
 

@@ -140,10 +140,12 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         else:
             channels, columns, max_range = self._episode.lidar_shape
             m = channels * columns
+            # body-frame points: the range from the sensor, which sits at the mount's offset
+            reach = np.float32(max_range + np.linalg.norm(np.asarray(self.config["lidar_mount"], float)[:3]))
             self.observation_space = spaces.Dict(
                 {
                     "flat": flat,
-                    "points": spaces.Box(-max_range, max_range, (m, 3), dtype=np.float32),
+                    "points": spaces.Box(-reach, reach, (m, 3), dtype=np.float32),
                     "valid": spaces.MultiBinary(m),
                     "pose": spaces.Box(-_POSE_BOUND, _POSE_BOUND, (3,), dtype=np.float64),
                 }

@@ -39,6 +39,7 @@ impl PyBatch {
     fn new(py: Python<'_>, num_envs: usize, seeds: &Bound<'_, PyAny>, preset: Option<String>, procedural: bool, ros_map: Option<PathBuf>, scenario: Option<PathBuf>, autoreset_mode: &str, threads: usize, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let args = SiteArgs { preset, procedural, ros_map, scenario };
         args.check()?;
+        args.check_keys(kwargs)?;
         if num_envs == 0 {
             return Err(invalid("num_envs", "must be at least 1"));
         }

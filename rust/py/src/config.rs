@@ -33,6 +33,23 @@ impl SiteArgs {
         Ok(())
     }
 
+    /// That the site keywords in `kwargs` apply to this site: `site_kind` to a procedural
+    /// one, the map options to a ROS map (else they would be silently ignored).
+    pub fn check_keys(&self, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let Some(kw) = kwargs else { return Ok(()) };
+        if !self.procedural && kw.contains("site_kind")? {
+            return Err(invalid("site_kind", "applies to procedural sites only (procedural=True)"));
+        }
+        if self.ros_map.is_none() {
+            for key in ["simplify", "unknown_is_wall", "unreachable_walls"] {
+                if kw.contains(key)? {
+                    return Err(invalid(key, "applies to ROS map sites only (map_path=...)"));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The core's site (loads a map or scenario file; call detached from the GIL).
     pub fn load(self, opts: &SiteOptions) -> shieldnav_core::Result<Site> {
         Ok(if let Some(name) = self.preset {

@@ -122,6 +122,7 @@ impl PyEpisode {
     ) -> PyResult<Self> {
         let args = SiteArgs { preset, procedural, ros_map, scenario };
         args.check()?;
+        args.check_keys(kwargs)?;
         let (config, opts) = episode_config(kwargs)?;
         let inner = py
             .detach(move || {
