@@ -247,6 +247,20 @@ fn simplified_walls_stay_within_the_tolerance_and_keep_contours_closed() {
     }
 }
 
+/// A 40 × 30 binary PGM: a room of free cells inside a one-cell occupied border.
+fn room_pgm() -> Vec<u8> {
+    let (w, h) = (40, 30);
+    let mut px = vec![0u8; w * h];
+    for j in 1..h - 1 {
+        for i in 1..w - 1 {
+            px[j * w + i] = 254;
+        }
+    }
+    let mut out = format!("P5\n{w} {h}\n255\n").into_bytes();
+    out.extend(px);
+    out
+}
+
 /// A scratch folder, removed when dropped (also when the test fails).
 struct TempDir(PathBuf);
 
@@ -307,6 +321,16 @@ fn malformed_files_name_file_and_field() {
     assert!(e.contains("c.yaml: field resolution"), "{e}");
     let e = load_ros_map(d.join("nope.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
     assert!(e.contains("nope.yaml: file"), "{e}");
+    // a map beyond the coordinates a scenario may use names its file and the field that put it there
+    std::fs::write(d.join("room.pgm"), room_pgm()).unwrap();
+    std::fs::write(d.join("far.yaml"), "image: room.pgm\nresolution: 0.05\norigin: [1e9, -11, 0]\n").unwrap();
+    let e = load_ros_map(d.join("far.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("far.yaml: field origin"), "{e}");
+    std::fs::write(d.join("huge.yaml"), "image: room.pgm\nresolution: 5000\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("huge.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("huge.yaml: field resolution"), "{e}");
+    std::fs::write(d.join("fine.yaml"), "image: room.pgm\nresolution: 0.05\norigin: [-3, -2, 0]\n").unwrap();
+    load_ros_map(d.join("fine.yaml"), &RosMapOptions::default()).unwrap();
     let folder = d.0.clone();
     drop(d);
     assert!(!folder.exists(), "the scratch folder {} is left behind", folder.display());

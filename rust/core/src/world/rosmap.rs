@@ -24,7 +24,7 @@ use super::geometry::Pose2;
 use super::grid::{Cell, OccupancyGrid};
 use super::map::StaticMap;
 use super::region::FreeRegion;
-use super::scenario::Scenario;
+use super::scenario::{Scenario, COORDINATE_LIMIT};
 use crate::error::{Error, Result};
 use crate::math::Real;
 
@@ -252,6 +252,15 @@ pub fn load_ros_map(yaml: impl AsRef<Path>, options: &RosMapOptions) -> Result<R
         Error::MapFile { path, location, reason } if location == "file" => Error::map_file(yaml, "field image", format!("{path}: {reason}")),
         other => other,
     })?;
+    // the whole image within the coordinates a scenario may use (the physics runs in f32)
+    let (w, h) = (grid.width as Real * grid.resolution, grid.height as Real * grid.resolution);
+    for corner in [[0.0, 0.0], [w, 0.0], [0.0, h], [w, h]] {
+        let p = grid.origin.transform_point(corner);
+        if !(p[0].abs() <= COORDINATE_LIMIT && p[1].abs() <= COORDINATE_LIMIT) {
+            let field = if meta.origin[0].abs().max(meta.origin[1].abs()) > COORDINATE_LIMIT { "field origin" } else { "field resolution" };
+            return Err(Error::map_file(yaml, field, format!("the map ({} × {} cells of {} m from origin {:?}) reaches ({}, {}); it must lie within {COORDINATE_LIMIT} m of (0, 0)", grid.width, grid.height, meta.resolution, meta.origin, p[0], p[1])));
+        }
+    }
     let (start, start_clearance) = interior_start(&grid).ok_or_else(|| Error::map_file(yaml, "map", "no free region inside the building (away from the image border) is wide enough to start in"))?;
     let mut map = StaticMap::new();
     let unknown_is_wall = options.unknown_is_wall;

@@ -31,10 +31,15 @@ use super::map::StaticMap;
 use super::moving::{MovingObstacle, Trajectory};
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::sensors::OdometryConfig;
+use crate::sensors::{OdometryConfig, OdometryFault};
 
-/// How far from the origin (m) walls and the start may lie.
+/// How far from the origin (m) everything of a scenario may lie: walls, start, goal,
+/// obstacles' shapes and key poses, odometry jumps (the physics runs in `f32`).
 pub const COORDINATE_LIMIT: Real = 1.0e5;
+/// The largest yaw (rad) of a scenario's poses and odometry yaw jumps.
+pub const YAW_LIMIT: Real = 1.0e4;
+/// The latest time (s) of a scenario's scripts (obstacles' key poses, odometry faults).
+pub const TIME_LIMIT: Real = 1.0e7;
 
 /// Everything that defines an episode's world before any command is given.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -94,7 +99,8 @@ impl Scenario {
     }
 
     /// Checks every part; the error names the part at fault. Coordinates must lie within
-    /// [`COORDINATE_LIMIT`] of the origin (the physics runs in `f32`).
+    /// [`COORDINATE_LIMIT`] of the origin (the physics runs in `f32`), yaws within
+    /// [`YAW_LIMIT`], script times within [`TIME_LIMIT`].
     pub fn validate(&self) -> Result<()> {
         let far = |p: [Real; 2]| p[0].abs() > COORDINATE_LIMIT || p[1].abs() > COORDINATE_LIMIT;
         for s in &self.map.segments {
@@ -103,17 +109,55 @@ impl Scenario {
                 return Err(Error::invalid("walls", format!("end points must be within {COORDINATE_LIMIT} m of the origin, got {s:?}")));
             }
         }
-        self.start.validate("start")?;
-        if far([self.start.x, self.start.y]) {
-            return Err(Error::invalid("start", format!("must be within {COORDINATE_LIMIT} m of the origin, got {:?}", self.start)));
-        }
+        let pose = |p: &Pose2, what: &'static str| {
+            p.validate(what)?;
+            if far([p.x, p.y]) || p.yaw.abs() > YAW_LIMIT {
+                return Err(Error::invalid(what, format!("must be within {COORDINATE_LIMIT} m of the origin with |yaw| at most {YAW_LIMIT} rad, got {p:?}")));
+            }
+            Ok(())
+        };
+        pose(&self.start, "start")?;
         if let Some(g) = &self.goal {
-            g.validate("goal")?;
+            pose(g, "goal")?;
         }
+        let time = |t: Real, what: &'static str| {
+            if t.abs() > TIME_LIMIT {
+                return Err(Error::invalid(what, format!("times must be within {TIME_LIMIT:?} s, got {t:?}")));
+            }
+            Ok(())
+        };
         for o in &self.obstacles {
             o.validate()?;
+            if let Some(v) = o.shape.vertices.iter().find(|&&v| far(v)) {
+                return Err(Error::invalid("obstacle.shape", format!("{}: vertices must be within {COORDINATE_LIMIT} m of its frame, got {v:?}", o.name)));
+            }
+            for (t, p) in &o.trajectory.keys {
+                time(*t, "trajectory")?;
+                pose(p, "trajectory")?;
+            }
         }
-        self.odometry.validate()
+        self.odometry.validate()?;
+        for f in &self.odometry.faults {
+            match *f {
+                OdometryFault::Jump { time: t, dx, dy } => {
+                    time(t, "odometry.faults")?;
+                    if dx.abs() > COORDINATE_LIMIT || dy.abs() > COORDINATE_LIMIT {
+                        return Err(Error::invalid("odometry.faults", format!("a jump must be within {COORDINATE_LIMIT:?} m, got ({dx:?}, {dy:?})")));
+                    }
+                }
+                OdometryFault::YawJump { time: t, dyaw } => {
+                    time(t, "odometry.faults")?;
+                    if dyaw.abs() > YAW_LIMIT {
+                        return Err(Error::invalid("odometry.faults", format!("a yaw jump must be within {YAW_LIMIT:?} rad, got {dyaw:?}")));
+                    }
+                }
+                OdometryFault::Freeze { start, end } => {
+                    time(start, "odometry.faults")?;
+                    time(end, "odometry.faults")?;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Parses the JSON scenario format above; `path` only names the source in errors.
@@ -230,6 +274,34 @@ mod tests {
     fn far_away_start_is_an_error() {
         let text = r#"{"walls": [], "start": {"x": 1e9, "y": 0, "yaw": 0}}"#;
         assert!(Scenario::from_json_str(text, "f.json").unwrap_err().to_string().contains("start"));
+    }
+
+    /// Every coordinate, yaw and script time of a scenario is bounded, not only the walls'
+    /// and the start's position (a goal at 1e7 m, a key pose at 1e9, a jump of 1e300 were
+    /// accepted; a start yaw of 1e300 failed later as "yaw: NaN" naming no file).
+    #[test]
+    fn far_or_huge_values_anywhere_name_the_file_and_the_part() {
+        let wall = r#""walls": [{"a": [0, -1], "b": [20, -1], "height": 2.0}]"#;
+        let tri = r#""shape": {"vertices": [[0, 0], [1, 0], [1, 1]], "height": 1}"#;
+        let odo = r#""translation_noise": 0.0, "yaw_noise": 0.0, "yaw_bias": 0.0"#;
+        let cases = [
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 1e300}}}}"#), "`start`"),
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "goal": {{"x": 1e7, "y": 0, "yaw": 0}}}}"#), "`goal`"),
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "c", {tri}, "trajectory": {{"keys": [[0.0, {{"x": 1e9, "y": 0, "yaw": 0}}]]}}}}]}}"#), "`trajectory`"),
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "c", {tri}, "trajectory": {{"keys": [[1e300, {{"x": 1, "y": 0, "yaw": 0}}]]}}}}]}}"#), "`trajectory`"),
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "p", {tri}, "walk": {{"waypoints": [[1e9, 0], [2, 0]], "speed": 1.0}}}}]}}"#), "`trajectory`"),
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "p", {tri}, "walk": {{"waypoints": [[5, 0], [2, 0]], "speed": 1.0, "start_time": 1e308}}}}]}}"#), "`start_time`"),
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "v", "shape": {{"vertices": [[0, 0], [1e9, 0], [1, 1]], "height": 1}}, "trajectory": {{"keys": [[0.0, {{"x": 1, "y": 0, "yaw": 0}}]]}}}}]}}"#), "`obstacle.shape`"),
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "odometry": {{{odo}, "faults": [{{"kind": "jump", "time": 1.0, "dx": 1e300, "dy": 0.0}}]}}}}"#), "`odometry.faults`"),
+            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "odometry": {{{odo}, "faults": [{{"kind": "yaw_jump", "time": 1.0, "dyaw": 1e9}}]}}}}"#), "`odometry.faults`"),
+        ];
+        for (text, part) in cases {
+            let err = Scenario::from_json_str(&text, "mine.json").unwrap_err().to_string();
+            assert!(err.starts_with("mine.json: ") && err.contains(part), "{err}");
+        }
+        // the paper's jump of 100 m is well within
+        let ok = format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "odometry": {{{odo}, "faults": [{{"kind": "jump", "time": 20.0, "dx": 100.0, "dy": 1.5}}]}}}}"#);
+        Scenario::from_json_str(&ok, "mine.json").unwrap();
     }
 
     #[test]
