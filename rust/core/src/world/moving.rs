@@ -37,7 +37,7 @@ impl Trajectory {
         if waypoints.len() < 2 {
             return Err(Error::invalid("waypoints", format!("need at least 2, got {}", waypoints.len())));
         }
-        if !(t_start.abs() <= super::scenario::TIME_LIMIT) {
+        if !t_start.is_finite() || t_start.abs() > super::scenario::TIME_LIMIT {
             return Err(Error::invalid("start_time", format!("must be within {:?} s, got {t_start:?}", super::scenario::TIME_LIMIT)));
         }
         let mut t = t_start;
