@@ -170,6 +170,11 @@ def test_errors_name_what_is_wrong(tmp_path):
         World(preset="odometry_jump", dropout=1.5)
     with pytest.raises(ValueError, match="invalid `robot_length`"):
         World(preset="odometry_jump", robot_length=0.0)
+    # a value of the wrong type or sign: the exception's note names the argument (PyO3)
+    for kwargs, kind, name in [({"seed": -1}, OverflowError, "seed"), ({"dt": "0.1"}, TypeError, "dt"), ({"channels": -1}, OverflowError, "channels")]:
+        with pytest.raises(kind) as caught:
+            World(preset="odometry_jump", **kwargs)
+        assert f"'{name}'" in " ".join(getattr(caught.value, "__notes__", [])), caught.value
     bad = tmp_path / "bad.yaml"
     bad.write_text("image: x.pgm\nresolution: fine\norigin: [0, 0, 0]\n")
     with pytest.raises(ValueError, match=r"bad.yaml: line 2, field resolution"):
