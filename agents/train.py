@@ -83,8 +83,9 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
     """Trains and saves ``out/model.zip``; returns its path."""
     if algo not in ALGOS:
         raise InvalidArgumentError(f"invalid `algo`: expected one of {sorted(ALGOS)}, got {algo!r}")
-    if timesteps < 1 or num_envs < 1:
-        raise InvalidArgumentError("invalid `timesteps`/`num_envs`: must be at least 1")
+    for name, value in (("timesteps", timesteps), ("num_envs", num_envs), ("eval_every", eval_every), ("eval_episodes", eval_episodes)):
+        if value < 1:
+            raise InvalidArgumentError(f"invalid `{name}`: must be at least 1, got {value}")
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(seed)
     torch.set_num_threads(1)
@@ -123,16 +124,27 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
     return path
 
 
+def positive_int(text: str) -> int:
+    """argparse type: an integer of at least 1 (argparse names the option in its error)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
 def main(argv: list[str] | None = None) -> Path:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
     ap.add_argument("--env", default="shieldnav/CorridorInspection-v0")
     ap.add_argument("--shield", default="composite", choices=["composite", "distance", "hardmin", "none"])
-    ap.add_argument("--timesteps", type=int, default=200_000)
-    ap.add_argument("--num-envs", type=int, default=8)
+    ap.add_argument("--timesteps", type=positive_int, default=200_000)
+    ap.add_argument("--num-envs", type=positive_int, default=8)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--eval-every", type=int, default=10_000)
-    ap.add_argument("--eval-episodes", type=int, default=3)
+    ap.add_argument("--eval-every", type=positive_int, default=10_000)
+    ap.add_argument("--eval-episodes", type=positive_int, default=3)
     ap.add_argument("--max-episode-steps", type=int, default=None)
     ap.add_argument("--out", default=None, help="run folder (default runs/<algo>_<shield>_<seed>)")
     ap.add_argument("--no-tensorboard", action="store_true")

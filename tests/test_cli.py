@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import warnings
 from importlib.metadata import entry_points
 
 import numpy as np
@@ -67,6 +68,57 @@ def test_filter_equals_the_shield(tmp_path, capsys):
     assert got["H"] == pytest.approx(want.H, abs=1e-12) and got["active"] == want.active
 
 
+@pytest.mark.parametrize("yaw, omega", [(0.0, 0.0), (0.3, 0.5)])
+def test_filter_3d_equals_the_3d_shield(yaw, omega, tmp_path, capsys):
+    pts = np.array([[1.0, 0.1, 0.05], [0.9, -0.3, 0.2], [-1.5, 0.0, 0.0]])
+    np.save(tmp_path / "scan.npy", pts)
+    argv = ["filter", str(tmp_path / "scan.npy"), "--u-nom", "1.0", "0.2", "0.1", "--semi-axes", "0.9", "0.45", "0.4"]
+    assert main(argv + ["--yaw", str(yaw), "--omega", str(omega)]) == 0
+    got = json.loads(capsys.readouterr().out)
+    c, s = np.cos(yaw), np.sin(yaw)
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    want = Shield(semi_axes=(0.9, 0.45, 0.4)).filter(pts, np.array([1.0, 0.2, 0.1]), rotation=rotation, omega=np.array([0.0, 0.0, omega]))
+    assert want.active and len(got["u"]) == 3 and got["num_points"] == 3
+    assert got["u"] == pytest.approx(list(want.u), abs=1e-12)
+    assert got["H"] == pytest.approx(want.H, abs=1e-12)
+
+
+@pytest.mark.parametrize("semi_axes, u_nom, message", [
+    ([], ["1", "0", "0"], "a 2D shield (2 semi-axes) takes 2 values, got 3"),
+    (["--semi-axes", "1", "1", "1"], ["1", "0"], "a 3D shield (3 semi-axes) takes 3 values, got 2"),
+])
+def test_filter_u_nom_must_match_the_shield_dimension(semi_axes, u_nom, message, tmp_path, capsys):
+    np.save(tmp_path / "scan.npy", np.ones((2, 3)))
+    assert main(["filter", str(tmp_path / "scan.npy"), "--u-nom", *u_nom, *semi_axes]) == 2
+    assert f"shieldnav: error: invalid `--u-nom`: {message}" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("semi_axes", [["0.9", "0.45"], ["0.9", "0.45", "0.4"]])
+def test_empty_csv_is_an_empty_scan_like_an_empty_npy(semi_axes, tmp_path, capsys):
+    dim = len(semi_axes)
+    (tmp_path / "scan.csv").write_text("")
+    np.save(tmp_path / "scan.npy", np.empty((0, dim)))
+    outs = []
+    for name in ("scan.csv", "scan.npy"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            assert main(["filter", str(tmp_path / name), "--u-nom", *["1"] * dim, "--semi-axes", *semi_axes]) == 0
+        outs.append({k: v for k, v in json.loads(capsys.readouterr().out).items() if k != "solve_time_us"})
+    assert outs[0] == outs[1] and outs[0]["num_points"] == 0 and outs[0]["u"] == [1.0] * dim
+
+
+@pytest.mark.parametrize("name, write", [
+    ("bad.csv", lambda p: p.write_text("1,2\nx,y\n")),
+    ("ragged.csv", lambda p: p.write_text("1,2\n3\n")),
+    ("objects.npy", lambda p: np.save(p, np.array([{"x": 1}], dtype=object), allow_pickle=True)),
+    ("truncated.npy", lambda p: p.write_bytes(b"\x93NUMPY")),
+])
+def test_unreadable_scans_name_the_file(name, write, tmp_path, capsys):
+    write(tmp_path / name)
+    assert main(["filter", str(tmp_path / name), "--u-nom", "1", "0"]) == 2
+    assert f"shieldnav: error: invalid `points`: cannot read {tmp_path / name}: " in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "argv, message",
     [
@@ -74,8 +126,15 @@ def test_filter_equals_the_shield(tmp_path, capsys):
         (["run", "shieldnav/ConstrictedPassage-v0", "--set", "kappa=-1"], "invalid `kappa`"),
         (["render", "shieldnav/ConstrictedPassage-v0", "--set", "kappa"], "expected key=value"),
         (["filter", "/no/such/scan.npy", "--u-nom", "1", "0"], "is not a file"),
+        (["run", "shieldnav/ConstrictedPassage-v0", "--seed", "-1"], "invalid `--seed`: must be at least 0, got -1"),
+        (["render", "shieldnav/ConstrictedPassage-v0", "--seed", "-1"], "invalid `--seed`: must be at least 0, got -1"),
+        (["run", "shieldnav/ConstrictedPassage-v0", "--steps", "0"], "invalid `--steps`: must be at least 1, got 0"),
+        (["run", "shieldnav/ConstrictedPassage-v0", "--steps", "-5"], "invalid `--steps`: must be at least 1, got -5"),
+        (["run", "shieldnav/ConstrictedPassage-v0", "--set", "render_mode=human"], "invalid `--set render_mode`: the command chooses"),
+        (["render", "shieldnav/ConstrictedPassage-v0", "--set", "render_mode=human"], "invalid `--set render_mode`: the command chooses"),
     ],
 )
 def test_errors_name_what_is_wrong(argv, message, capsys):
     assert main(argv) == 2
-    assert message in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.startswith("shieldnav: error: ") and message in err, err

@@ -11,7 +11,10 @@ import pytest
 pytest.importorskip("torch")
 
 from agents import benchmark, train  # noqa: E402
+from shieldnav.exceptions import InvalidArgumentError  # noqa: E402
 from shieldnav.sb3 import ShieldnavVecEnv  # noqa: E402
+
+COUNTS = {"timesteps": "--timesteps", "num_envs": "--num-envs", "eval_every": "--eval-every", "eval_episodes": "--eval-episodes"}
 
 
 def test_ppo_trains_saves_reloads_and_is_benchmarked_identically_twice(tmp_path):
@@ -52,3 +55,21 @@ def test_sb3_adapter_follows_same_step_autoreset():
         assert infos[i]["terminal_observation"].shape == (73,)
         assert infos[i]["shieldnav_episode"]["steps"] == 5
         assert not np.array_equal(infos[i]["terminal_observation"], obs[i]), "obs is already the next episode's"
+
+
+@pytest.mark.parametrize("value", ["0", "-5"])
+@pytest.mark.parametrize("option", COUNTS.values())
+def test_command_line_rejects_a_count_below_one_before_training(option, value, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        train.main([option, value, "--out", str(tmp_path / "run"), "--no-progress", "--no-tensorboard"])
+    assert exc.value.code == 2
+    assert f"argument {option}: must be at least 1, got {value}" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("name", COUNTS)
+def test_train_names_a_count_below_one(name, tmp_path):
+    kwargs = {"timesteps": 64, "num_envs": 1, "eval_every": 64, "eval_episodes": 1, name: 0}
+    with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`: must be at least 1, got 0"):
+        train.train("ppo", "shieldnav/ConstrictedPassage-v0", "composite", seed=0, out=tmp_path / "run", **kwargs)
+    assert not (tmp_path / "run").exists()

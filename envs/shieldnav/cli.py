@@ -4,6 +4,7 @@
     shieldnav render shieldnav/MapInspection-v0 --set map_path=my_map.yaml --out site.png
     shieldnav run shieldnav/ConstrictedPassage-v0 --policy scripted --gif run.gif
     shieldnav filter scan.npy --u-nom 1.0 0.2        # the shield on a saved scan (N×2 or N×3)
+    shieldnav filter scan.npy --u-nom 1 0 0 --semi-axes 0.9 0.45 0.4   # a 3D shield (N×3 scan)
 
 ``--set key=value`` passes any environment keyword (``shieldnav.ENV_DEFAULTS``); values are
 read as JSON when they parse (numbers, lists, true/false/null), else as strings. Errors name
@@ -16,6 +17,7 @@ import argparse
 import json
 import math
 import sys
+import warnings
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -39,6 +41,11 @@ def _settings(pairs: Sequence[str]) -> dict[str, Any]:
     return out
 
 
+def _at_least(option: str, value: int | None, low: int) -> None:
+    if value is not None and value < low:
+        raise ValueError(f"invalid `{option}`: must be at least {low}, got {value}")
+
+
 def _make(env_id: str, settings: dict[str, Any], render: bool, shield: str | None = None) -> Any:
     import gymnasium as gym
 
@@ -46,6 +53,8 @@ def _make(env_id: str, settings: dict[str, Any], render: bool, shield: str | Non
 
     if env_id not in ENV_IDS:
         raise ValueError(f"invalid environment id {env_id!r}: known ids are {', '.join(sorted(ENV_IDS))}")
+    if "render_mode" in settings:
+        raise ValueError("invalid `--set render_mode`: the command chooses the render mode itself (rgb_array for `render` and `--gif`)")
     kwargs = dict(settings)
     if shield is not None:
         kwargs["shield"] = shield
@@ -68,6 +77,7 @@ def cmd_info(_: argparse.Namespace) -> None:
 def cmd_render(args: argparse.Namespace) -> None:
     from PIL import Image
 
+    _at_least("--seed", args.seed, 0)
     env = _make(args.env_id, _settings(args.set), render=True)
     env.reset(seed=args.seed)
     frame = env.render()
@@ -77,6 +87,8 @@ def cmd_render(args: argparse.Namespace) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> None:
+    _at_least("--seed", args.seed, 0)
+    _at_least("--steps", args.steps, 1)
     env = _make(args.env_id, _settings(args.set), render=args.gif is not None, shield=args.shield)
     obs, info = env.reset(seed=args.seed)
     rng = np.random.default_rng(args.seed)
@@ -118,15 +130,30 @@ def cmd_run(args: argparse.Namespace) -> None:
 def cmd_filter(args: argparse.Namespace) -> None:
     from shieldnav import Shield
 
-    path = Path(args.points)
-    if not path.is_file():
-        raise ValueError(f"invalid `points`: {path} is not a file")
-    points = np.load(path) if path.suffix == ".npy" else np.loadtxt(path, delimiter=",", ndmin=2)
-    points = np.ascontiguousarray(points)
     kwargs: dict[str, Any] = {"method": args.method}
     if args.semi_axes is not None:
         kwargs["semi_axes"] = tuple(args.semi_axes)
-    out = Shield(**kwargs).filter(points, np.asarray(args.u_nom, dtype=np.float64), yaw=args.yaw, omega=args.omega)
+    shield = Shield(**kwargs)
+    if len(args.u_nom) != shield.dim:
+        raise ValueError(f"invalid `--u-nom`: a {shield.dim}D shield ({shield.dim} semi-axes) takes {shield.dim} values, got {len(args.u_nom)}")
+    path = Path(args.points)
+    if not path.is_file():
+        raise ValueError(f"invalid `points`: {path} is not a file")
+    try:
+        if path.suffix == ".npy":
+            points = np.load(path)
+        else:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # an empty file is an empty scan
+                points = np.loadtxt(path, delimiter=",", ndmin=2)
+            if points.size == 0:
+                points = np.empty((0, shield.dim))
+    except (ValueError, OSError, EOFError) as err:
+        raise ValueError(f"invalid `points`: cannot read {path}: {err}") from err
+    points = np.ascontiguousarray(points)
+    # 3D: --yaw is the rotation about z (body to world) and --omega the body yaw rate
+    omega = args.omega if shield.dim == 2 else np.array([0.0, 0.0, args.omega])
+    out = shield.filter(points, np.asarray(args.u_nom, dtype=np.float64), yaw=args.yaw, omega=omega)
     print(json.dumps({
         "u": [float(v) for v in out.u], "H": out.H, "h_min": out.h_min if math.isfinite(out.h_min) and out.h_min < 1e300 else None,
         "active": out.active, "feasible": out.feasible, "num_points": out.num_points, "solve_time_us": out.solve_time_ns / 1e3,
@@ -154,9 +181,9 @@ def parser() -> argparse.ArgumentParser:
     u.set_defaults(func=cmd_run)
     f = sub.add_parser("filter", help="the shield on a saved scan (.npy or .csv, N×2 or N×3, body frame)")
     f.add_argument("points")
-    f.add_argument("--u-nom", type=float, nargs=2, required=True, metavar=("VX", "VY"))
-    f.add_argument("--yaw", type=float, default=0.0)
-    f.add_argument("--omega", type=float, default=0.0)
+    f.add_argument("--u-nom", type=float, nargs="+", required=True, metavar="V", help="VX VY, or VX VY VZ for a 3D shield")
+    f.add_argument("--yaw", type=float, default=0.0, help="heading (rad; about z for a 3D shield)")
+    f.add_argument("--omega", type=float, default=0.0, help="yaw rate (rad/s; about body z for a 3D shield)")
     f.add_argument("--semi-axes", type=float, nargs="+", default=None)
     f.add_argument("--method", default="composite", choices=["composite", "distance", "hardmin", "none"])
     f.set_defaults(func=cmd_filter)
