@@ -36,6 +36,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.error import ResetNeeded
 
 from shieldnav import NominalController, Shield, ViewPlanner
 from shieldnav.env import CorridorInspectionEnv
@@ -72,6 +73,14 @@ def _free_interval(world: np.ndarray, centre: np.ndarray, axis: np.ndarray, half
     return lo, hi
 
 
+
+def _number(name: str, value: Any) -> float:
+    """``value`` as a float, or an ``InvalidArgumentError`` naming ``name``."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"invalid `{name}`: expected a number, got {value!r}") from None
+
 class InspectionAgent:
     """``act(obs, info) -> action`` for any shieldnav environment and action mode.
 
@@ -92,6 +101,8 @@ class InspectionAgent:
         fit_margin: float = 0.05,
         stall_time: float | None = 2.0,
     ) -> None:
+        lookahead, fit_margin = _number("lookahead", lookahead), _number("fit_margin", fit_margin)
+        stall_time = None if stall_time is None else _number("stall_time", stall_time)
         if mission not in ("auto", "inspect", "goal"):
             raise InvalidArgumentError(f"invalid `mission`: expected 'auto', 'inspect' or 'goal', got {mission!r}")
         if not (math.isfinite(lookahead) and lookahead > 0):
@@ -141,6 +152,7 @@ class InspectionAgent:
         self._origin = np.zeros(2)
         #: The reference ``(p_d, ψ_d)`` of the last call, in the odometry's world frame.
         self.reference: tuple[np.ndarray, float] | None = None
+        self._reset_with = -1  # the env's reset this agent was reset after
 
     def reset(self) -> None:
         """Forgets the held reference and reads the scenario's goal (call after ``env.reset``)."""
@@ -155,6 +167,7 @@ class InspectionAgent:
             raise InvalidArgumentError("invalid `mission`: 'goal' needs a scenario with a goal")
         self._goal = np.array(goal[:2]) if transit and goal is not None else None
         self._origin = np.array(self._env.episode.estimated_pose[:2])
+        self._reset_with = self._env.resets
 
     def _transit(self, x: float, y: float) -> tuple[np.ndarray, float]:
         assert self._goal is not None
@@ -244,6 +257,9 @@ class InspectionAgent:
 
     def act(self, obs: Any, info: dict[str, Any] | None = None) -> np.ndarray:
         """The action that makes the env's ``u_nom`` the paper's nominal command."""
+        if self._reset_with != self._env.resets:
+            # (else it would act on the last episode's goal and memory, or none)
+            raise ResetNeeded("call agent.reset() after each env.reset(), before agent.act()")
         points, pose = self._observe(obs)
         x, y, yaw = (float(v) for v in pose)
         ref = self._transit(x, y) if self._goal is not None else self._inspect(points, x, y, yaw)

@@ -1,7 +1,9 @@
 """Top-down renderer, window and video writer, on synthetic frames (numpy only, no env)."""
 
 import dataclasses
+import re
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -234,6 +236,22 @@ def test_optional_dependencies_name_the_extra(tmp_path, monkeypatch):
     with pytest.raises(InvalidArgumentError, match="rgb"):
         window.show(np.zeros((64, 48, 3), np.uint8))
     window.close()  # a no-op when never opened
+
+
+def test_the_render_extra_holds_what_its_hints_name():
+    tomllib = pytest.importorskip("tomllib")
+    root = Path(__file__).resolve().parents[1]
+    extra = tomllib.loads((root / "pyproject.toml").read_text())["project"]["optional-dependencies"]["render"]
+    names = {re.split(r"[<>=\[]", e)[0] for e in extra}
+    assert {"pygame", "imageio", "imageio-ffmpeg"} <= names, names
+
+
+def test_render_fps_is_the_control_rate():
+    import gymnasium as gym
+
+    assert gym.make("shieldnav/ConstrictedPassage-v0").metadata["render_fps"] == 50
+    env = gym.make("shieldnav/ConstrictedPassage-v0", dt=0.04)
+    assert env.metadata["render_fps"] == 25 and env.unwrapped.metadata["render_fps"] == 25
 
 
 def test_canvas_reuse_does_not_leak_between_frames():

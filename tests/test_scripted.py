@@ -84,3 +84,22 @@ def test_agent_options_are_checked():
         InspectionAgent(env, fit_margin=-1.0)
     with pytest.raises(InvalidArgumentError, match="stall_time"):
         InspectionAgent(env, stall_time=0.0)
+    for key in ("fit_margin", "lookahead", "stall_time"):
+        with pytest.raises(InvalidArgumentError, match=key):
+            InspectionAgent(env, **{key: "a"})
+
+
+def test_agent_must_be_reset_with_the_env():
+    # without agent.reset() it acted on no goal (the inspection mission) or the last episode's
+    env = gym.make("shieldnav/ConstrictedPassage-v0")
+    agent = InspectionAgent(env)
+    obs, info = env.reset(seed=0)
+    with pytest.raises(gym.error.ResetNeeded, match=r"agent.reset\(\)"):
+        agent.act(obs, info)
+    agent.reset()
+    agent.act(obs, info)
+    obs, info = env.reset(seed=0)
+    with pytest.raises(gym.error.ResetNeeded):
+        agent.act(obs, info)
+    agent.reset()
+    agent.act(obs, info)

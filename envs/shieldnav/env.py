@@ -98,7 +98,7 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
     * v0: initial release.
     """
 
-    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 25}
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 50}
 
     def __init__(
         self,
@@ -124,6 +124,10 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         self.observation_mode = observation
         self._report_timing = bool(report_timing)
         self.render_mode = render_mode
+        # frames at the control rate (human mode shows every step; video tools read this)
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / float(self.config["dt"])}
+        #: How many times the env has been reset (agents check that they were reset with it).
+        self.resets = 0
         n = self._episode.observation_len
         bins = n - 9
         # the odometry change is unbounded in principle (a jump); the command is within the
@@ -181,6 +185,7 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
             raise InvalidArgumentError(f"invalid `options`: reset takes no options, got {sorted(options)}")
         self._episode_seed = int(self.np_random.integers(0, 2**63))
         self._episode.reset(self._episode_seed)
+        self.resets += 1
         if self.render_mode == "human":
             self.render()
         return self._obs(self._episode.observe()), self._info()
