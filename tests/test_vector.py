@@ -61,6 +61,23 @@ def test_make_vec_gives_the_native_batch_equal_to_single_envs(env_id):
     assert ends == 2 * n, "every sub-environment hit the 60-step limit twice in 130 steps"
 
 
+def test_vector_info_holds_the_single_envs_keys_and_values():
+    single = gym.make(ENV)
+    single.reset(seed=4)
+    vec = gym.make_vec(ENV, num_envs=2, vectorization_mode="vector_entry_point")
+    vec.reset(seed=4)
+    for k in range(3):
+        a = actions(k, 2)
+        one = single.step(a[0])[4]
+        many = vec.step(a)[4]
+        keys = set(one) - {"solve_time_ns"}  # (wall time)
+        assert keys <= set(many), keys - set(many)
+        for key in keys:
+            np.testing.assert_array_equal(np.asarray(many[key])[0], np.asarray(one[key]), err_msg=key)
+            assert many["_" + key].all()
+    vec.close()
+
+
 def test_same_step_mode_returns_the_final_observation():
     v = CorridorInspectionVectorEnv(2, preset="constricted_passage", autoreset_mode="same_step", max_episode_steps=5)
     assert v.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP

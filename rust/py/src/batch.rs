@@ -106,6 +106,7 @@ impl PyBatch {
         let info = PyDict::new(py);
         info.set_item("cost", col(&|s| s.report.cost))?;
         info.set_item("collision", flag(&|s| s.report.cost > 0.0))?;
+        info.set_item("contacts", PyArray1::from_iter(py, out.iter().map(|s| s.report.contacts)))?;
         info.set_item("clearance", col(&|s| s.report.clearance))?;
         info.set_item("H", col(&|s| s.report.h))?;
         info.set_item("h_min", col(&|s| s.report.h_min))?;
@@ -117,6 +118,7 @@ impl PyBatch {
         info.set_item("deadlock", flag(&|s| s.report.deadlock))?;
         info.set_item("odometry_error", col(&|s| s.report.odometry_error))?;
         info.set_item("solve_time_ns", PyArray1::from_iter(py, out.iter().map(|s| s.report.solve_time_ns)))?;
+        info.set_item("num_points", PyArray1::from_iter(py, out.iter().map(|s| s.report.num_points)))?;
         info.set_item("time", col(&|s| s.report.time))?;
         let u = |f: &dyn Fn(&SlotOutcome) -> [f64; 3]| PyArray1::from_iter(py, out.iter().flat_map(f)).reshape([n, 3]);
         info.set_item("u_nom", u(&|s| s.report.u_nom)?)?;
