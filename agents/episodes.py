@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 import time
+from pathlib import Path
 from typing import Any, Callable
 
 import gymnasium as gym
@@ -32,6 +33,8 @@ def load_policy(spec: str, env: gym.Env[Any, Any]) -> tuple[Policy, Callable[[],
     if spec.endswith(".zip"):
         from stable_baselines3 import PPO, SAC
 
+        if not Path(spec).exists():
+            raise InvalidArgumentError(f"invalid `policy`: the model file {spec} does not exist")
         errors = []
         for algo in (PPO, SAC):
             try:
@@ -41,6 +44,14 @@ def load_policy(spec: str, env: gym.Env[Any, Any]) -> tuple[Policy, Callable[[],
                 errors.append(f"{algo.__name__}: {err}")
         else:
             raise InvalidArgumentError(f"invalid `policy`: {spec} is not a PPO or SAC model ({'; '.join(errors)})")
+        for what, made_for, env_space in (("observation", model.observation_space, env.observation_space),
+                                          ("action", model.action_space, env.action_space)):
+            if made_for != env_space:
+                theirs, ours = _space(made_for), _space(env_space)
+                if theirs == ours:
+                    theirs += " with other bounds"
+                name = env.spec.id if env.spec else "the environment"
+                raise InvalidArgumentError(f"invalid `policy`: {spec} was made for the {what} space {theirs}, {name} has {ours}")
 
         def act(obs: Any, info: dict[str, Any]) -> np.ndarray:
             return model.predict(obs, deterministic=True)[0]
@@ -48,10 +59,33 @@ def load_policy(spec: str, env: gym.Env[Any, Any]) -> tuple[Policy, Callable[[],
         return act, lambda: None
     if ":" in spec:
         module, name = spec.split(":", 1)
-        factory = getattr(importlib.import_module(module), name)
+        try:
+            factory = getattr(importlib.import_module(module), name)
+        except (ImportError, ValueError) as err:
+            raise InvalidArgumentError(f"invalid `policy`: cannot import the module {module!r} ({err})") from err
+        except AttributeError:
+            raise InvalidArgumentError(f"invalid `policy`: the module {module!r} has no {name!r}") from None
+        if not callable(factory):
+            raise InvalidArgumentError(f"invalid `policy`: {spec} is not callable")
         policy = factory(env)
         return policy, getattr(policy, "reset", lambda: None)
     raise InvalidArgumentError(f"invalid `policy`: expected 'scripted', a .zip SB3 model or 'module:callable', got {spec!r}")
+
+
+def _space(space: Any) -> str:
+    """A space in a few words (a Box's bounds can run to hundreds of numbers)."""
+    text = str(space)
+    return text if len(text) <= 60 else f"{type(space).__name__} of shape {space.shape}, {space.dtype}"
+
+
+def check_policy(task: dict[str, Any]) -> None:
+    """Loads the task's policy on the task's environment, running nothing: raises what
+    :func:`run_episode` would raise for a bad policy spec, before any episode runs."""
+    env = gym.make(task["env_id"], shield=task["shield"], **task.get("kwargs", {}))
+    try:
+        load_policy(task.get("policy", "scripted"), env)
+    finally:
+        env.close()
 
 
 def run_episode(task: dict[str, Any]) -> dict[str, Any]:
@@ -59,20 +93,24 @@ def run_episode(task: dict[str, Any]) -> dict[str, Any]:
 
     Returns the task, the episode summary, wall-clock figures, the shield's per-step times and
     point counts, and with ``trace`` the time series (t, u_nom, u*, H, h_min) and with
-    ``video_every > 0`` every n-th rendered frame.
+    ``video_every > 0`` every n-th rendered frame. ``steps_per_s`` times the policy and the
+    environment's step only: the tracing is not timed and the frames, captured during the
+    episode, are drawn after it, so episodes with and without a video compare.
     """
     kwargs = dict(task.get("kwargs", {}))
     video_every = int(task.get("video_every", 0))
-    env = gym.make(task["env_id"], shield=task["shield"], render_mode="rgb_array" if video_every else None, **kwargs)
+    env = gym.make(task["env_id"], shield=task["shield"], **kwargs)
     act, reset = load_policy(task.get("policy", "scripted"), env)
     obs, info = env.reset(seed=int(task["seed"]))
     reset()
     solve, points, frames = [], [], []
     series: dict[str, list[Any]] = {k: [] for k in ("t", "u_nom", "u_star", "H", "h_min", "clearance")}
-    t0 = time.perf_counter()
+    wall = 0.0
     steps = 0
     while True:
+        t0 = time.perf_counter()
         obs, _, terminated, truncated, info = env.step(act(obs, info))
+        wall += time.perf_counter() - t0
         steps += 1
         solve.append(info["solve_time_ns"])
         points.append(info["num_points"])
@@ -84,12 +122,16 @@ def run_episode(task: dict[str, Any]) -> dict[str, Any]:
             series["h_min"].append(info["h_min"])
             series["clearance"].append(info["clearance"])
         if video_every and steps % video_every == 0:
-            frames.append(env.render())
+            frames.append(env.unwrapped.render_frame())  # type: ignore[attr-defined]
         if terminated or truncated:
             break
-    wall = time.perf_counter() - t0
     summary = env.unwrapped.episode.summary()  # type: ignore[attr-defined]
     env.close()
+    if frames:  # what env.render() draws, drawn here so that the step timing leaves it out
+        from shieldnav.rendering import TopDownRenderer
+
+        renderer = TopDownRenderer()
+        frames = [renderer.draw(f) for f in frames]
     return {
         "task": {k: v for k, v in task.items() if k != "kwargs"} | {"kwargs": kwargs},
         "summary": summary,

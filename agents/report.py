@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from collections import defaultdict
 from pathlib import Path
 from typing import Any, Iterable
@@ -68,17 +69,27 @@ def write_files(results: list[dict[str, Any]], rows: dict[tuple[str, str], dict[
     out.mkdir(parents=True, exist_ok=True)
     episodes = [{"task": r["task"], "summary": r["summary"], "steps_per_s": r["steps_per_s"]} for r in results]
     aggregate_list = [{"scenario": k[0], "shield": k[1], **v} for k, v in rows.items()]
-    (out / "benchmark.json").write_text(json.dumps({"aggregate": aggregate_list, "episodes": episodes}, indent=1, default=json_default))
+    (out / "benchmark.json").write_text(to_json({"aggregate": aggregate_list, "episodes": episodes}))
     with open(out / "benchmark.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["scenario", "shield"] + [c for c, _ in COLUMNS])
         w.writeheader()
         w.writerows(aggregate_list)
 
 
-def json_default(v: Any) -> Any:
+def to_json(data: Any) -> str:
+    """Valid JSON of ``data``: numpy values as Python ones, NaN and ±inf (e.g. the
+    ``deadlock_time`` of an episode without a deadlock) as ``null``."""
+    return json.dumps(_finite(data), indent=1, allow_nan=False)
+
+
+def _finite(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {k: _finite(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return [_finite(x) for x in v]
     if isinstance(v, np.generic):
-        return v.item()
-    raise TypeError(f"not JSON serialisable: {type(v).__name__}")
+        v = v.item()
+    return None if isinstance(v, float) and not math.isfinite(v) else v
 
 
 def plot_scenario(scenario: str, traces: dict[str, dict[str, Any]], timing: dict[str, tuple[np.ndarray, np.ndarray]], path: Path) -> None:

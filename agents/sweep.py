@@ -14,18 +14,18 @@ under the composite shield, on the paper's three scenarios and procedural office
   true clearance and contacts (the guarantee is continuous-time; sampling can break it).
 
     python -m agents.sweep                    # everything (about 10 minutes on 2 cores)
-    python -m agents.sweep --quick            # one seed, fewer values
+    python -m agents.sweep --quick            # one seed (unless --seeds), fewer values
     python -m agents.sweep --experiments kappa points --seeds 5 --backend ray
 
 Writes ``sweep.json`` (every episode and the aggregate), ``sweep.csv`` and one figure per
-experiment to ``--out``. Interrupting keeps and reports the episodes that finished.
+experiment to ``--out``. Interrupting keeps and reports the episodes that finished. Options
+are checked before anything runs (as ``agents.benchmark`` does).
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
-import json
 import math
 import os
 import sys
@@ -36,7 +36,6 @@ from typing import Any
 import numpy as np
 
 from agents import benchmark, report
-from shieldnav.exceptions import InvalidArgumentError
 from shieldnav.registration import ENV_IDS
 
 EXPERIMENTS = ["conservatism", "kappa", "gamma", "points", "rates"]
@@ -197,30 +196,25 @@ def table(rows: list[dict[str, Any]]) -> str:
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--experiments", nargs="+", default=EXPERIMENTS, choices=EXPERIMENTS)
-    ap.add_argument("--scenarios", nargs="+", default=SCENARIOS, help="environment ids")
-    ap.add_argument("--seeds", type=int, default=3, help="seeds per setting and scenario")
-    ap.add_argument("--quick", action="store_true", help="one seed, three values per experiment")
-    ap.add_argument("--max-steps", type=int, default=None, help="override every episode's step limit")
+    ap.add_argument("--scenarios", nargs="+", type=benchmark.env_id, default=SCENARIOS, help="environment ids")
+    ap.add_argument("--seeds", type=benchmark.positive_int, default=None, help="seeds per setting and scenario (default 3; --quick: 1)")
+    ap.add_argument("--quick", action="store_true", help="one seed (unless --seeds), three values per experiment")
+    ap.add_argument("--max-steps", type=benchmark.positive_int, default=None, help="override every episode's step limit")
     ap.add_argument("--backend", default="local", choices=["local", "ray"])
     ap.add_argument("--ray-address", default=None)
-    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--workers", type=benchmark.positive_int, default=os.cpu_count() or 1)
     ap.add_argument("--out", default="results/sweep")
     ap.add_argument("--no-plots", action="store_true")
     args = ap.parse_args(argv)
-    if args.seeds < 1 or args.workers < 1:
-        raise InvalidArgumentError("invalid `--seeds`/`--workers`: must be at least 1")
-    unknown = [s for s in args.scenarios if s not in ENV_IDS]
-    if unknown:
-        raise InvalidArgumentError(f"invalid `--scenarios`: unknown ids {unknown}; known: {sorted(ENV_IDS)}")
-    seeds = 1 if args.quick else args.seeds
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    benchmark.check_options(ap, args, "experiments", "scenarios")
+    seeds = args.seeds or (1 if args.quick else 3)
+    out = benchmark.output_folder(ap, args.out)
     cons = conservatism() if "conservatism" in args.experiments else []
     results = benchmark.run(tasks(args.experiments, args.scenarios, seeds, args.quick, args.max_steps), args.backend, args.workers, args.ray_address)
     rows = aggregate(results)
     print(table(rows))
     episodes = [{"task": r["task"], "summary": r["summary"]} for r in results]
-    (out / "sweep.json").write_text(json.dumps({"aggregate": rows, "conservatism": cons, "episodes": episodes}, indent=1, default=report.json_default))
+    (out / "sweep.json").write_text(report.to_json({"aggregate": rows, "conservatism": cons, "episodes": episodes}))
     with open(out / "sweep.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else ["experiment"])
         w.writeheader()

@@ -33,6 +33,7 @@ try:
 except ImportError as err:  # pragma: no cover
     raise ImportError('training needs stable-baselines3 and torch: pip install "shieldnav[train]"') from err
 
+from agents.benchmark import positive_int
 from shieldnav.sb3 import ShieldnavVecEnv
 
 ALGOS = {"ppo": PPO, "sac": SAC}
@@ -122,17 +123,6 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
     (out / "run.json").write_text(json.dumps(meta, indent=1))
     venv.close()
     return path
-
-
-def positive_int(text: str) -> int:
-    """argparse type: an integer of at least 1 (argparse names the option in its error)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
 
 
 def main(argv: list[str] | None = None) -> Path:

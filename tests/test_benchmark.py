@@ -49,11 +49,99 @@ def test_a_module_callable_policy_is_benchmarked(tmp_path):
     assert row["success_rate"] == 1.0 and row["with_contact"] == 0
 
 
-def test_bad_policy_is_a_clear_error(tmp_path):
-    from shieldnav import InvalidArgumentError
+CP = "shieldnav/ConstrictedPassage-v0"
 
-    with pytest.raises(InvalidArgumentError, match="policy"):
-        benchmark.main(["--quick", "--policy", "nonsense", "--workers", "1", "--out", str(tmp_path)])
+
+@pytest.mark.parametrize("args, message", [
+    (["--seeds", "0"], "argument --seeds: must be at least 1, got 0"),
+    (["--workers", "0"], "argument --workers: must be at least 1, got 0"),
+    (["--workers", "-1"], "argument --workers: must be at least 1, got -1"),
+    (["--max-steps", "0"], "argument --max-steps: must be at least 1, got 0"),
+    (["--max-steps", "-3"], "argument --max-steps: must be at least 1, got -3"),
+    (["--scenarios", "bogus"], "argument --scenarios: unknown environment id 'bogus'"),
+    (["--scenarios", CP, CP], f"argument --scenarios: {CP} given more than once"),
+    (["--shields", "none", "none"], "argument --shields: none given more than once"),
+    (["--policy", "nonsense"], "argument --policy: invalid `policy`: expected 'scripted'"),
+    (["--policy", "nosuch.mod:f"], "argument --policy: invalid `policy`: cannot import the module 'nosuch.mod'"),
+    (["--policy", "agents.scripted:nosuch"], "argument --policy: invalid `policy`: the module 'agents.scripted' has no 'nosuch'"),
+    (["--policy", "missing.zip"], "the model file missing.zip does not exist"),
+    (["--out", "/proc/shieldnav"], "argument --out: cannot write to the folder /proc/shieldnav"),
+    (["--ray-address", "auto"], "argument --ray-address: needs --backend ray"),
+])
+def test_user_errors_are_usage_errors_naming_the_option_before_any_episode(args, message, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(benchmark, "run", lambda *a: pytest.fail("episodes ran"))
+    with pytest.raises(SystemExit) as exc:
+        benchmark.main(["--shields", "none", "--workers", "1", "--max-steps", "50", "--out", str(tmp_path / "out"), *args])
+    assert exc.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_out_path_that_is_a_file_is_refused_before_any_episode(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(benchmark, "run", lambda *a: pytest.fail("episodes ran"))
+    (tmp_path / "file").write_text("")
+    with pytest.raises(SystemExit) as exc:
+        benchmark.main(["--quick", "--out", str(tmp_path / "file")])
+    assert exc.value.code == 2 and f"argument --out: {tmp_path / 'file'} is a file" in capsys.readouterr().err
+
+
+def test_scenarios_and_seeds_win_over_quick(tmp_path, monkeypatch):
+    ran = []
+    monkeypatch.setattr(benchmark, "run", lambda todo, *a: ran.extend(todo) or [])
+    benchmark.main(["--quick", "--scenarios", CP, "--seeds", "2", "--shields", "none", "--out", str(tmp_path)])
+    assert [(t["env_id"], t["seed"]) for t in ran] == [(CP, 0), (CP, 1)]
+    ran.clear()
+    benchmark.main(["--quick", "--shields", "none", "--out", str(tmp_path)])
+    assert [(t["env_id"], t["seed"]) for t in ran] == [(s, 0) for s in benchmark.PAPER]
+
+
+def test_a_model_for_other_spaces_is_refused_naming_the_file(tmp_path, capsys):
+    pytest.importorskip("torch")
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    path = tmp_path / "cartpole.zip"
+    PPO("MlpPolicy", gym.make("CartPole-v1"), n_steps=64, batch_size=64).save(path)
+    with pytest.raises(SystemExit) as exc:
+        benchmark.main(["--scenarios", CP, "--shields", "none", "--seeds", "1", "--workers", "1", "--policy", str(path),
+                        "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2
+    assert f"argument --policy: invalid `policy`: {path} was made for the observation space Box of shape (4,)" in err
+    assert f"{CP} has Box of shape (73,)" in err
+
+
+def strict_json(path):
+    """The file as JSON, refusing the NaN and Infinity that json.loads accepts by default."""
+    def refuse(name):
+        raise ValueError(f"{path} holds {name}: not JSON")
+
+    return json.loads(path.read_text(), parse_constant=refuse)
+
+
+def test_benchmark_json_is_valid_json_with_null_for_no_deadlock_time(tmp_path):
+    benchmark.main(["--scenarios", CP, "--shields", "none", "--seeds", "1", "--workers", "1", "--max-steps", "50",
+                    "--out", str(tmp_path), "--no-plots"])
+    summary = strict_json(tmp_path / "benchmark.json")["episodes"][0]["summary"]
+    assert not summary["deadlock"] and summary["deadlock_time"] is None
+
+
+def test_to_json_writes_null_for_non_finite_numbers():
+    from agents import report
+
+    text = report.to_json({"a": np.float64("nan"), "b": [float("inf"), np.int32(3)], "c": np.array([1.5, -np.inf])})
+    assert json.loads(text) == {"a": None, "b": [None, 3], "c": [1.5, None]}
+
+
+def test_steps_per_s_leaves_out_the_video_frames():
+    """Seed 0 of the composite records the GIF: its steps/s times the stepping only, so it is
+    comparable with an episode without frames (timing the rendering made it 20-80 times slower)."""
+    task = benchmark.tasks([CP], ["composite"], 1, "scripted", video=True, steps=100)[0]
+    with_video = [benchmark.run_episode(task) for _ in range(2)]
+    without = max(benchmark.run_episode(task | {"video_every": 0})["steps_per_s"] for _ in range(2))
+    frames = with_video[0]["frames"]
+    assert len(frames) == 100 // benchmark.VIDEO_EVERY and frames[0].ndim == 3 and frames[0].dtype == np.uint8
+    assert max(r["steps_per_s"] for r in with_video) > without / 3, ([r["steps_per_s"] for r in with_video], without)
 
 
 def test_interrupted_run_keeps_finished_episodes(monkeypatch):
