@@ -209,6 +209,18 @@ def test_bad_actions_and_arguments_raise_named_errors():
         with pytest.raises(InvalidArgumentError, match=f"invalid `{key}`: applies to ROS map"):
             gym.make("shieldnav/CorridorInspection-v0", **{key: value})
     gym.make("shieldnav/CorridorInspection-v0", site_kind="tunnel").reset(seed=0)
+    # the defaults can be passed back in (site keys at their defaults change nothing)
+    for env_id in ("shieldnav/ConstrictedPassage-v0", "shieldnav/CorridorInspection-v0"):
+        gym.make(env_id, **shieldnav.ENV_DEFAULTS).reset(seed=0)
+    # a core name shared by two keywords is the one given; the generator's robot limits name the robot
+    with pytest.raises(InvalidArgumentError, match="invalid `controller_u_max`"):
+        gym.make("shieldnav/ConstrictedPassage-v0", controller_u_max=[1.0, -1.0])
+    with pytest.raises(InvalidArgumentError, match="invalid `robot_length/robot_width`|invalid `robot_width`"):
+        gym.make("shieldnav/CorridorInspection-v0", robot_width=0.9)
+    # a strided action of three is read, not refused as "shape (3,), got [3]"
+    env = gym.make("shieldnav/ConstrictedPassage-v0")
+    env.reset(seed=0)
+    env.unwrapped.episode.step(np.zeros(6, np.float32)[::2])
     with pytest.raises(InvalidArgumentError, match="invalid `robot_width`"):
         gym.make_vec("shieldnav/ConstrictedPassage-v0", num_envs=2, vectorization_mode="vector_entry_point", robot_width=-1.0)
 

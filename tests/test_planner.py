@@ -46,3 +46,49 @@ def test_nominal_controller_is_kp_4_and_saturates_keeping_direction():
     np.testing.assert_allclose(u, [1.0, 0.5])
     with pytest.raises(ValueError, match="kp"):
         NominalController(kp=0.0)
+
+
+def test_fortran_ordered_points_are_refused_not_misread():
+    # np.array([xs, ys]).T is Fortran-ordered: read as rows it planned toward a wrong wall
+    x = np.arange(-20, 20, 0.05)
+    pts = np.array([x, np.full_like(x, -2.0)]).T
+    assert pts.flags.f_contiguous and not pts.flags.c_contiguous
+    with pytest.raises(ValueError, match="points.*C-contiguous"):
+        ViewPlanner().plan(pts, (0.0, 0.0), 0.0)
+    p_d, _ = ViewPlanner().plan(np.ascontiguousarray(pts), (0.0, 0.0), 0.0)
+    assert p_d[1] == pytest.approx(-0.5)
+
+
+def test_planner_bounds_and_names():
+    for h in (0, 10_001, 2**40):  # 2**40 aborted the process allocating the path
+        with pytest.raises(ValueError, match="horizon"):
+            ViewPlanner(horizon=h)
+    with pytest.raises(ValueError, match="fov_h_deg"):
+        ViewPlanner(fov_h_deg=200.0)
+    planner = ViewPlanner()
+    assert planner.update(wall_right(), (0.0, 0.0), 0.0) is not None
+    # checked while the held reference stands too (they returned it)
+    for args, name in [((wall_right(), (np.nan, 0.0), 0.0), "position"), ((wall_right(), (0.0, 0.0), np.nan), "yaw"),
+                       ((np.array([[1e200, 1e200]]), (0.0, 0.0), 0.0), "points"), ((np.zeros((0, 2)), (0.0, 0.0), np.inf), "yaw")]:
+        with pytest.raises(ValueError, match=f"`{name}`"):
+            planner.update(*args)
+        with pytest.raises(ValueError, match=f"`{name}`"):
+            planner.plan(*args)
+
+
+def test_planner_output_goes_straight_into_the_controller():
+    p_d, psi = ViewPlanner().plan(wall_right(), np.array([0.0, 0.0]), 0.0)
+    u, w = NominalController().command(p_d, psi, np.zeros(2), 0.0)
+    assert u[0] > 0.0 and w < 0.0
+    with pytest.raises(ValueError, match="goal"):
+        NominalController().command((1.0, 2.0, 3.0), 0.0, (0.0, 0.0), 0.0)
+
+
+def test_controller_saturates_for_any_finite_gain_and_names_its_inputs():
+    u, _ = NominalController(kp=1e300).command((1e9, 1.0), 0.0, (0.0, 0.0), 0.0)  # gave NaN
+    assert u[0] == pytest.approx(1.0) and 0.0 < u[1] < 1e-8
+    c = NominalController()
+    for args, name in [(((1e10, 0.0), 0.0, (0.0, 0.0), 0.0), "goal"), (((0.0, 0.0), 0.0, (np.nan, 0.0), 0.0), "position"),
+                       (((0.0, 0.0), np.nan, (0.0, 0.0), 0.0), "goal_yaw"), (((0.0, 0.0), 0.0, (0.0, 0.0), np.inf), "yaw")]:
+        with pytest.raises(ValueError, match=f"`{name}`"):
+            c.command(*args)

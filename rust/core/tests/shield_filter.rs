@@ -239,6 +239,12 @@ fn bad_inputs_are_errors_naming_the_argument() {
     // (a tiny semi-axis made 1/a² infinite and every h NaN, blamed on the points)
     bad(ShieldConfig { semi_axes: vec![1e-300, 1e-300], ..ShieldConfig::default() }, "semi_axes");
     bad(ShieldConfig { semi_axes: vec![0.9, 0.45, 2e3], ..ShieldConfig::default() }, "semi_axes");
+    // (κ = 1e100 returned a NaN command marked feasible)
+    bad(ShieldConfig { kappa: 1e100, ..ShieldConfig::default() }, "kappa");
+    let mut sharp = Shield::new(ShieldConfig { kappa: 1e6, ..ShieldConfig::default() }).unwrap();
+    let wall: Vec<f64> = (0..81).flat_map(|k| [1.0, -2.0 + 0.05 * k as f64]).collect();
+    let o = sharp.filter(&Scan::new_f64(&wall, 2).unwrap(), &BodyState::planar(0.0, 0.0).unwrap(), &[1.0, 1.0]).unwrap();
+    assert!(o.u.iter().all(|v| v.is_finite()) && o.u[0] < 1.0, "{o:?}");
     // (10^12 bins asked for 16 TB and aborted the process)
     bad(ShieldConfig { scan: ScanFilter { angular_bins: Some(1_000_000_000_000), ..ScanFilter::default() }, ..ShieldConfig::default() }, "angular_bins");
     bad(ShieldConfig { scan: ScanFilter { angular_bins: Some(8193), ..ScanFilter::default() }, ..ShieldConfig::default() }, "angular_bins");

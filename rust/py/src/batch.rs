@@ -51,7 +51,7 @@ impl PyBatch {
                 let site = args.load(&opts)?;
                 Batch::new(site, config, &seeds, mode, threads)
             })
-            .map_err(crate::config::keyed)?;
+            .map_err(|e| crate::config::keyed(e, kwargs))?;
         Ok(Self { outcomes: vec![SlotOutcome::default(); num_envs], inner })
     }
 

@@ -37,13 +37,26 @@ impl SiteArgs {
     /// one, the map options to a ROS map (else they would be silently ignored).
     pub fn check_keys(&self, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
         let Some(kw) = kwargs else { return Ok(()) };
-        if !self.procedural && kw.contains("site_kind")? {
+        // (a key at its default changes nothing: the defaults can be passed back in)
+        let set = |key: &str, default: Bound<'_, PyAny>| -> PyResult<bool> {
+            Ok(match kw.get_item(key)? {
+                Some(v) => !v.eq(default)?,
+                None => false,
+            })
+        };
+        let py = kw.py();
+        if !self.procedural && set("site_kind", "office".into_pyobject(py)?.into_any())? {
             return Err(invalid("site_kind", "applies to procedural sites only (procedural=True)"));
         }
         if self.ros_map.is_none() {
-            for key in ["simplify", "unknown_is_wall", "unreachable_walls"] {
-                if kw.contains(key)? {
-                    return Err(invalid(key, "applies to ROS map sites only (map_path=...)"));
+            let d = RosMapOptions::default();
+            for (key, default) in [
+                ("simplify", d.simplify.into_pyobject(py)?.into_any()),
+                ("unknown_is_wall", d.unknown_is_wall.into_pyobject(py)?.to_owned().into_any()),
+                ("unreachable_walls", d.unreachable_walls.into_pyobject(py)?.to_owned().into_any()),
+            ] {
+                if set(key, default)? {
+                    return Err(invalid(key, "applies to ROS map sites only (ros_map=..., the environments' map_path=...)"));
                 }
             }
         }
@@ -151,25 +164,36 @@ pub fn known_keys() -> Vec<&'static str> {
 
 /// A core error as a Python exception, a field of the configuration named by its keyword
 /// here (`length` → `robot_length`, `alpha_max` → `yaw_accel_max`, ...); a core name shared
-/// by several keywords is left as it is.
-pub fn keyed(err: shieldnav_core::Error) -> PyErr {
+/// by several keywords (`u_max`: the shield's or the controller's) is the one of them given
+/// in `kwargs`.
+pub fn keyed(err: shieldnav_core::Error, kwargs: Option<&Bound<'_, PyDict>>) -> PyErr {
     let shieldnav_core::Error::InvalidArgument { name, reason } = &err else {
         return crate::errors::to_py(err);
     };
-    let (mut key, mut count) = ("", 0);
+    let mut keys: Vec<&str> = Vec::new();
     macro_rules! pair {
         ($key:literal, $($path:ident).+) => {
             if stringify!($($path).+).rsplit('.').next().map(str::trim) == Some(*name) {
-                (key, count) = ($key, count + 1);
+                keys.push($key);
             }
         };
     }
     each_field!(pair);
-    if *name == "mount" {
-        (key, count) = ("lidar_mount", 1);
+    match *name {
+        "mount" => keys = vec!["lidar_mount"],
+        // (the procedural generator's limits on the robot)
+        "footprint" => keys = vec!["robot_length", "robot_width"],
+        _ => {}
     }
-    if count == 1 && key != *name {
-        return invalid(key, reason);
+    let given: Vec<&str> = keys.iter().copied().filter(|k| kwargs.is_some_and(|d| d.contains(k).unwrap_or(false))).collect();
+    let key = match (keys.len(), given.len()) {
+        (1, _) => keys[0].to_string(),
+        (_, 1) => given[0].to_string(),
+        (n, _) if n > 1 && *name == "footprint" => keys.join("/"),
+        _ => return crate::errors::to_py(err),
+    };
+    if key != *name {
+        return invalid(&key, reason);
     }
     crate::errors::to_py(err)
 }
@@ -267,8 +291,8 @@ pub fn episode_config(
         }
         site.ros_map.simplify = t;
     }
-    c.world.lidar.validate().map_err(keyed)?;
-    c.world.robot.validate().map_err(keyed)?;
+    c.world.lidar.validate().map_err(|e| keyed(e, Some(kw)))?;
+    c.world.robot.validate().map_err(|e| keyed(e, Some(kw)))?;
     site.generator.footprint = shieldnav_core::world::Footprint {
         length: c.world.robot.length,
         width: c.world.robot.width,

@@ -26,17 +26,14 @@ fn pose_tuple(p: Pose2) -> (f64, f64, f64) {
 fn action3(obj: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
     let bad_shape =
         |shape: &[usize]| invalid("action", format!("expected shape (3,), got {shape:?}"));
+    // (through a view, so that a strided array of three is read too)
     if let Ok(a) = obj.extract::<PyReadonlyArray1<f32>>() {
-        return match a.as_slice() {
-            Ok(&[x, y, w]) => Ok([x as f64, y as f64, w as f64]),
-            _ => Err(bad_shape(a.shape())),
-        };
+        let v = a.as_array();
+        return if v.len() == 3 { Ok([v[0] as f64, v[1] as f64, v[2] as f64]) } else { Err(bad_shape(a.shape())) };
     }
     if let Ok(a) = obj.extract::<PyReadonlyArray1<f64>>() {
-        return match a.as_slice() {
-            Ok(&[x, y, w]) => Ok([x, y, w]),
-            _ => Err(bad_shape(a.shape())),
-        };
+        let v = a.as_array();
+        return if v.len() == 3 { Ok([v[0], v[1], v[2]]) } else { Err(bad_shape(a.shape())) };
     }
     obj.extract::<[f64; 3]>().map_err(|_| {
         invalid(
@@ -129,7 +126,7 @@ impl PyEpisode {
                 let site = args.load(&opts)?;
                 Episode::new(site, config, seed)
             })
-            .map_err(crate::config::keyed)?;
+            .map_err(|e| crate::config::keyed(e, kwargs))?;
         Ok(Self { inner })
     }
 

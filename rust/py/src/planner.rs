@@ -16,6 +16,15 @@ fn points_arg<'py>(obj: &Bound<'py, PyAny>) -> PyResult<PyReadonlyArray2<'py, f6
     Ok(a)
 }
 
+/// A 2-vector from a tuple, a list or a length-2 array (the planner's `p_d` goes straight
+/// into the controller).
+fn pair(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<[f64; 2]> {
+    match crate::shield::vector(name, obj)?.as_slice() {
+        &[x, y] => Ok([x, y]),
+        v => Err(invalid(name, format!("expected 2 numbers (x, y), got {}", v.len()))),
+    }
+}
+
 type Pose<'py> = (Bound<'py, PyArray1<f64>>, f64);
 
 fn pose_out<'py>(py: Python<'py>, v: ViewPose) -> Pose<'py> {
@@ -37,14 +46,19 @@ impl PyViewPlanner {
     fn call<'py, T>(
         &mut self,
         points: &Bound<'py, PyAny>,
-        position: (f64, f64),
+        position: &Bound<'py, PyAny>,
         yaw: f64,
         f: impl FnOnce(&mut ViewPlanner, &[f64], usize, &[f64; 3], f64) -> shieldnav_core::Result<T>,
     ) -> PyResult<T> {
         let a = points_arg(points)?;
         let stride = a.shape()[1];
-        let slice = a.as_slice().map_err(|_| invalid("points", "must be C-contiguous"))?;
-        f(&mut self.inner, slice, stride, &[position.0, position.1, 0.0], yaw).map_err(to_py)
+        // (a Fortran-ordered array is contiguous too, but its rows are not runs of memory)
+        if !a.is_c_contiguous() {
+            return Err(invalid("points", "must be C-contiguous (np.ascontiguousarray)"));
+        }
+        let slice = a.as_slice().map_err(|_| invalid("points", "must be C-contiguous (np.ascontiguousarray)"))?;
+        let [x, y] = pair("position", position)?;
+        f(&mut self.inner, slice, stride, &[x, y, 0.0], yaw).map_err(to_py)
     }
 }
 
@@ -61,22 +75,27 @@ impl PyViewPlanner {
         reach_threshold = ViewPlannerConfig::default().reach_threshold,
     ))]
     fn new(d_view: f64, gamma_h: f64, fov_h_deg: f64, fov_v_deg: f64, gamma_v: f64, horizon: usize, reach_threshold: f64) -> PyResult<Self> {
+        for (name, v) in [("fov_h_deg", fov_h_deg), ("fov_v_deg", fov_v_deg)] {
+            if !(v > 0.0 && v < 180.0) {
+                return Err(invalid(name, format!("must be in (0, 180) degrees, got {v}")));
+            }
+        }
         let config = ViewPlannerConfig { d_view, gamma_h, gamma_v, fov_h: fov_h_deg.to_radians(), fov_v: fov_v_deg.to_radians(), horizon, reach_threshold };
         Ok(Self { inner: ViewPlanner::new(config).map_err(to_py)? })
     }
 
     /// One step of Eq. (flip) from the estimated pose.
-    fn plan<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: (f64, f64), yaw: f64) -> PyResult<Option<Pose<'py>>> {
+    fn plan<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: &Bound<'py, PyAny>, yaw: f64) -> PyResult<Option<Pose<'py>>> {
         Ok(self.call(points, position, yaw, |p, s, n, x, y| p.plan(s, n, x, y))?.map(|v| pose_out(py, v)))
     }
 
     /// The held reference, replanned once the estimate is within reach_threshold of it.
-    fn update<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: (f64, f64), yaw: f64) -> PyResult<Option<Pose<'py>>> {
+    fn update<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: &Bound<'py, PyAny>, yaw: f64) -> PyResult<Option<Pose<'py>>> {
         Ok(self.call(points, position, yaw, |p, s, n, x, y| p.update(s, n, x, y))?.map(|v| pose_out(py, v)))
     }
 
     /// The predicted inspection path over the horizon: a list of (p_d, psi).
-    fn predict_path<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: (f64, f64), yaw: f64) -> PyResult<Vec<Pose<'py>>> {
+    fn predict_path<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: &Bound<'py, PyAny>, yaw: f64) -> PyResult<Vec<Pose<'py>>> {
         Ok(self.call(points, position, yaw, |p, s, n, x, y| p.predict_path(s, n, x, y))?.into_iter().map(|v| pose_out(py, v)).collect())
     }
 
@@ -110,8 +129,8 @@ impl PyNominalController {
     }
 
     /// The nominal command toward (goal, goal_yaw) from the estimated (position, yaw).
-    fn command<'py>(&self, py: Python<'py>, goal: (f64, f64), goal_yaw: f64, position: (f64, f64), yaw: f64) -> PyResult<(Bound<'py, PyArray1<f64>>, f64)> {
-        let c = self.inner.command(&[goal.0, goal.1], goal_yaw, &[position.0, position.1], yaw).map_err(to_py)?;
+    fn command<'py>(&self, py: Python<'py>, goal: &Bound<'py, PyAny>, goal_yaw: f64, position: &Bound<'py, PyAny>, yaw: f64) -> PyResult<(Bound<'py, PyArray1<f64>>, f64)> {
+        let c = self.inner.command(&pair("goal", goal)?, goal_yaw, &pair("position", position)?, yaw).map_err(to_py)?;
         Ok((PyArray1::from_slice(py, &c.velocity), c.yaw_rate))
     }
 }

@@ -12,7 +12,7 @@ use crate::errors::{invalid, to_py};
 const DETACH_POINTS: usize = 4096;
 
 /// A float vector from a 1-D numpy array or any sequence of numbers.
-fn vector(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+pub(crate) fn vector(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
     if let Ok(a) = obj.extract::<PyReadonlyArray1<f64>>() {
         return Ok(a.as_array().to_vec());
     }

@@ -2,6 +2,7 @@
 //! yaw tracking toward the planner's `ψ`, both saturated.
 
 use crate::error::{Error, Result};
+use crate::planner::MAX_COORDINATE;
 
 /// Gains and limits; `Default` holds the paper's `K_p = 4 I`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,15 +56,24 @@ impl NominalController {
 
     /// The command toward `goal` (m) and `goal_yaw` (rad) from the estimated pose.
     pub fn command(&self, goal: &[f64; 2], goal_yaw: f64, position: &[f64; 2], yaw: f64) -> Result<NominalCommand> {
-        if goal.iter().chain(position).chain([goal_yaw, yaw].iter()).any(|v| !v.is_finite()) {
-            return Err(Error::invalid("goal", "goal, position and yaws must be finite"));
+        let far = |p: &[f64; 2]| !p.iter().all(|v| v.abs() <= MAX_COORDINATE);
+        if far(goal) {
+            return Err(Error::invalid("goal", format!("must be finite and within {MAX_COORDINATE:e} m, got {goal:?}")));
+        }
+        if far(position) {
+            return Err(Error::invalid("position", format!("must be finite and within {MAX_COORDINATE:e} m, got {position:?}")));
+        }
+        for (name, v) in [("goal_yaw", goal_yaw), ("yaw", yaw)] {
+            if !v.is_finite() {
+                return Err(Error::invalid(name, format!("must be finite, got {v}")));
+            }
         }
         let c = &self.config;
-        let mut u = [c.kp * (goal[0] - position[0]), c.kp * (goal[1] - position[1])];
-        let scale = (u[0].abs() / c.u_max[0]).max(u[1].abs() / c.u_max[1]);
-        if scale > 1.0 {
-            u = [u[0] / scale, u[1] / scale];
-        }
+        // saturated, the direction kept: d / m, from the distance itself so that no gain
+        // overflows it (kp · d may be infinite for a finite gain)
+        let d = [goal[0] - position[0], goal[1] - position[1]];
+        let m = (d[0].abs() / c.u_max[0]).max(d[1].abs() / c.u_max[1]);
+        let u = if c.kp * m > 1.0 { [d[0] / m, d[1] / m] } else { [c.kp * d[0], c.kp * d[1]] };
         let err = (goal_yaw - yaw + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
         let w = (c.k_yaw * err).clamp(-c.omega_max, c.omega_max);
         Ok(NominalCommand { velocity: u, yaw_rate: w })
@@ -81,6 +91,21 @@ mod tests {
         assert!((near.velocity[0] - 0.4).abs() < 1e-12 && (near.velocity[1] + 0.2).abs() < 1e-12);
         let far = c.command(&[3.0, 1.5], 0.0, &[0.0, 0.0], 0.0).unwrap();
         assert!((far.velocity[0] - 1.0).abs() < 1e-12 && (far.velocity[1] - 0.5).abs() < 1e-12);
+    }
+
+    /// A gain or distance whose product overflows saturates like any other (it gave NaN).
+    #[test]
+    fn huge_gain_or_distance_saturates() {
+        let c = NominalController::new(NominalControllerConfig { kp: 1e300, ..NominalControllerConfig::default() }).unwrap();
+        let u = c.command(&[1e9, 1.0], 0.0, &[0.0, 0.0], 0.0).unwrap().velocity;
+        assert!((u[0] - 1.0).abs() < 1e-12 && u[1] > 0.0 && u[1] < 1e-8, "{u:?}");
+        let c = NominalController::new(NominalControllerConfig::default()).unwrap();
+        let u = c.command(&[1e9, 0.0], 0.0, &[-1e9, 0.0], 0.0).unwrap().velocity;
+        assert_eq!(u, [1.0, 0.0]);
+        for (goal, pos, yaw, name) in [([1e10, 0.0], [0.0; 2], 0.0, "goal"), ([0.0; 2], [f64::NAN, 0.0], 0.0, "position"), ([0.0; 2], [0.0; 2], f64::INFINITY, "yaw")] {
+            let e = c.command(&goal, 0.0, &pos, yaw).unwrap_err().to_string();
+            assert!(e.contains(&format!("`{name}`")), "{e}");
+        }
     }
 
     #[test]

@@ -62,6 +62,13 @@ pub struct ViewPlanner {
     world: Vec<Vec3>,
 }
 
+/// Most steps of a predicted path ([`ViewPlannerConfig::horizon`]; the paper's is 5).
+pub const MAX_HORIZON: usize = 10_000;
+
+/// Largest coordinate (m) of points and positions the planner takes: their distances are
+/// computed without overflow far beyond any map.
+pub const MAX_COORDINATE: f64 = 1e9;
+
 impl ViewPlanner {
     /// Validates `config`.
     pub fn new(config: ViewPlannerConfig) -> Result<Self> {
@@ -80,8 +87,8 @@ impl ViewPlanner {
                 return Err(Error::invalid(name, format!("must be in (0, π) rad, got {v}")));
             }
         }
-        if c.horizon == 0 {
-            return Err(Error::invalid("horizon", "must be at least 1"));
+        if !(1..=MAX_HORIZON).contains(&c.horizon) {
+            return Err(Error::invalid("horizon", format!("must be from 1 to {MAX_HORIZON}, got {}", c.horizon)));
         }
         Ok(Self { config, current: None, world: Vec::new() })
     }
@@ -105,8 +112,15 @@ impl ViewPlanner {
         if stride != 2 && stride != 3 || !points_body.len().is_multiple_of(stride) {
             return Err(Error::invalid("points", format!("expected rows of 2 or 3 coordinates, got {} values with stride {stride}", points_body.len())));
         }
-        if points_body.iter().chain(position.iter()).any(|v| !v.is_finite()) || !yaw.is_finite() {
-            return Err(Error::invalid("points", "points, position and yaw must be finite"));
+        let within = |v: &f64| v.abs() <= MAX_COORDINATE;
+        if !points_body.iter().all(within) {
+            return Err(Error::invalid("points", format!("must be finite and within {MAX_COORDINATE:e} m")));
+        }
+        if !position.iter().all(within) {
+            return Err(Error::invalid("position", format!("must be finite and within {MAX_COORDINATE:e} m, got {position:?}")));
+        }
+        if !yaw.is_finite() {
+            return Err(Error::invalid("yaw", format!("must be finite, got {yaw}")));
         }
         let r = rot_z(yaw);
         self.world.clear();
@@ -152,7 +166,7 @@ impl ViewPlanner {
     /// The predicted inspection path: Eq. (flip) applied `horizon` times from the estimate.
     pub fn predict_path(&mut self, points: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<Vec<ViewPose>> {
         self.load(points, stride, position, yaw)?;
-        let mut path = Vec::with_capacity(self.config.horizon);
+        let mut path = Vec::new();
         let mut from = *position;
         for _ in 0..self.config.horizon {
             match self.step(&from) {
@@ -169,6 +183,8 @@ impl ViewPlanner {
     /// The reference to track now: the held one until the estimate comes within
     /// `reach_threshold` of it, then a newly planned one.
     pub fn update(&mut self, points: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<Option<ViewPose>> {
+        // (the inputs are checked on every call, also while the held reference stands)
+        self.load(points, stride, position, yaw)?;
         let reached = match self.current {
             None => true,
             Some(v) => ((v.position[0] - position[0]).powi(2) + (v.position[1] - position[1]).powi(2)).sqrt() < self.config.reach_threshold,
@@ -189,6 +205,30 @@ mod tests {
     fn wall_right() -> Vec<f64> {
         // a 40 m wall 2 m to the robot's right (y = −2), points every 5 cm
         (-400..=400).flat_map(|k| [k as f64 * 0.05, -2.0]).collect()
+    }
+
+    /// A horizon beyond the bound is an error (2^40 aborted the process allocating the path);
+    /// inputs are checked on every update, also while a reference is held; each named.
+    #[test]
+    fn bounds_and_checks_name_the_argument() {
+        for h in [0, MAX_HORIZON + 1, 1 << 40] {
+            let e = ViewPlanner::new(ViewPlannerConfig { horizon: h, ..ViewPlannerConfig::default() }).unwrap_err().to_string();
+            assert!(e.contains("`horizon`"), "{e}");
+        }
+        let mut p = ViewPlanner::new(ViewPlannerConfig { horizon: MAX_HORIZON, ..ViewPlannerConfig::default() }).unwrap();
+        assert!(p.predict_path(&wall_right(), 2, &[0.0; 3], 0.0).unwrap().len() <= MAX_HORIZON);
+        assert!(p.update(&wall_right(), 2, &[0.0; 3], 0.0).unwrap().is_some());
+        for (pts, pos, yaw, name) in [
+            (wall_right(), [f64::NAN, 0.0, 0.0], 0.0, "position"),
+            (wall_right(), [0.0; 3], f64::NAN, "yaw"),
+            (vec![1e200, 1e200], [0.0; 3], 0.0, "points"),
+            (vec![f64::NAN, 0.0], [0.0; 3], 0.0, "points"),
+        ] {
+            let e = p.update(&pts, 2, &pos, yaw).unwrap_err().to_string();
+            assert!(e.contains(&format!("`{name}`")), "{e}");
+            let e = p.plan(&pts, 2, &pos, yaw).unwrap_err().to_string();
+            assert!(e.contains(&format!("`{name}`")), "{e}");
+        }
     }
 
     #[test]

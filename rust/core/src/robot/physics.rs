@@ -2,8 +2,10 @@
 //! and the robot (a dynamic body with the true footprint, driven by velocity each step).
 //!
 //! Rapier works in `f32`; poses cross over at the boundary (about 1e-5 m at 100 m from the
-//! origin). Contacts are read from rapier's narrow phase after each step and reported as the
-//! number of penetrating contact points and the deepest penetration.
+//! origin). Contacts are measured after each step at the final poses with parry's exact
+//! contact query (walls found through rapier's broad-phase tree, every obstacle), within
+//! [`CONTACT_TOLERANCE`] (touching counts), and reported as the number of colliders in
+//! contact and the deepest penetration (see [`PhysicsScene::contacts`]).
 
 use rapier2d::prelude::*;
 

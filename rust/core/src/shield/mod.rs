@@ -286,12 +286,19 @@ pub struct Shield {
     rows: LinearConstraints,
 }
 
+/// Largest soft-min sharpness `κ`: beyond it the weights' products overflow (κ = 1e100 gave a
+/// NaN command), and the soft-min equals the hard min to every digit long before.
+pub const MAX_KAPPA: f64 = 1e6;
+
 impl Shield {
     /// Validates `config`; every error names the field at fault.
     pub fn new(config: ShieldConfig) -> Result<Self> {
         let envelope = Envelope::new(&config.semi_axes)?;
         positive("gamma", config.gamma)?;
         positive("kappa", config.kappa)?;
+        if config.kappa > MAX_KAPPA {
+            return Err(Error::invalid("kappa", format!("must be at most {MAX_KAPPA:e} (the soft-min is the hard min long before), got {:e}", config.kappa)));
+        }
         positive("alpha", config.alpha)?;
         positive("safety_distance", config.safety_distance)?;
         if !(config.grad_eps.is_finite() && config.grad_eps >= 0.0) {
@@ -439,6 +446,10 @@ impl Shield {
                 (h_min, h_min, g_near, 0.0, n, sol)
             }
         };
+        if !sol.u.iter().all(|v| v.is_finite()) {
+            // (never seen within the parameters' bounds; a NaN command must not reach a robot)
+            return Err(Error::Solver(format!("the filtered command is not finite: {:?}", &sol.u[..dim])));
+        }
         Ok(ShieldOutcome {
             u: sol.u,
             dim,
