@@ -108,7 +108,8 @@ impl ViewPlanner {
         self.current = None;
     }
 
-    fn load(&mut self, points_body: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<()> {
+    /// Checks the inputs of every call; each error names its argument.
+    fn check(points_body: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<()> {
         if stride != 2 && stride != 3 || !points_body.len().is_multiple_of(stride) {
             return Err(Error::invalid("points", format!("expected rows of 2 or 3 coordinates, got {} values with stride {stride}", points_body.len())));
         }
@@ -122,6 +123,11 @@ impl ViewPlanner {
         if !yaw.is_finite() {
             return Err(Error::invalid("yaw", format!("must be finite, got {yaw}")));
         }
+        Ok(())
+    }
+
+    fn load(&mut self, points_body: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<()> {
+        Self::check(points_body, stride, position, yaw)?;
         let r = rot_z(yaw);
         self.world.clear();
         for c in points_body.chunks_exact(stride) {
@@ -184,7 +190,7 @@ impl ViewPlanner {
     /// `reach_threshold` of it, then a newly planned one.
     pub fn update(&mut self, points: &[f64], stride: usize, position: &Vec3, yaw: f64) -> Result<Option<ViewPose>> {
         // (the inputs are checked on every call, also while the held reference stands)
-        self.load(points, stride, position, yaw)?;
+        Self::check(points, stride, position, yaw)?;
         let reached = match self.current {
             None => true,
             Some(v) => ((v.position[0] - position[0]).powi(2) + (v.position[1] - position[1]).powi(2)).sqrt() < self.config.reach_threshold,
