@@ -148,6 +148,30 @@ def test_step_applies_the_shield_to_the_current_scan():
         assert info["intervention"] == pytest.approx(np.hypot(*(info["u_filtered"][:2] - info["u_nom"][:2])))
 
 
+def test_map_paths_expand_home_and_an_image_is_named_as_not_the_yaml(tmp_path, monkeypatch):
+    from shieldnav.maps import DEFAULT_MAP
+
+    monkeypatch.setenv("HOME", str(DEFAULT_MAP.parent))
+    gym.make("shieldnav/MapInspection-v0", map_path=f"~/{DEFAULT_MAP.name}").reset(seed=0)
+    image = tmp_path / "map.png"
+    image.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
+    with pytest.raises(shieldnav.MapFileError, match="not text: expected the map's map_server YAML"):
+        gym.make("shieldnav/MapInspection-v0", map_path=str(image))
+
+
+@pytest.mark.parametrize("kwargs", [{"action_mode": "world", "shield": "none"},
+                                    {"action_mode": "waypoint", "shield": "none", "controller_u_max": [2.0, 2.0]}])
+def test_unshielded_world_and_waypoint_commands_stay_in_the_space(kwargs):
+    # (a world-frame command (1, 1) turned into the body frame left the command's bound)
+    env = gym.make("shieldnav/ConstrictedPassage-v0", **kwargs)
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    for k in range(200):
+        action = np.array([1.0, 1.0, 0.3], np.float32) if k % 2 == 0 else rng.uniform(-1, 1, 3).astype(np.float32)
+        obs, *_ = env.step(action)
+        assert env.observation_space.contains(obs), (k, obs[-3:], env.observation_space.high[-3:])
+
+
 def test_dict_observation_stays_in_its_space_with_an_offset_mount():
     # the sensor 0.6 m ahead of the body's centre sees 3 m: body-frame points reach 3.6 m
     env = gym.make("shieldnav/ConstrictedPassage-v0", observation="dict", lidar_mount=(0.6, 0.3, 0.5, 0.0), lidar_max_range=3.0)

@@ -42,6 +42,15 @@ def test_ppo_trains_saves_reloads_and_is_benchmarked_identically_twice(tmp_path)
     assert ea["path_length"] == eb["path_length"] and ea["total_reward"] == eb["total_reward"]
 
 
+def test_sb3_adapter_honours_time_limit():
+    v = ShieldnavVecEnv("shieldnav/ConstrictedPassage-v0", num_envs=2, time_limit=6)
+    v.seed(0)
+    v.reset()
+    dones = [v.step_wait()[2].all() if v.step_async(np.zeros((2, 3), np.float32)) is None else None for _ in range(6)]
+    assert dones == [False] * 5 + [True]
+    v.close()
+
+
 def test_sb3_adapter_follows_same_step_autoreset():
     v = ShieldnavVecEnv("shieldnav/ConstrictedPassage-v0", num_envs=2, max_episode_steps=5)
     v.seed(0)

@@ -78,6 +78,34 @@ def test_vector_info_holds_the_single_envs_keys_and_values():
     vec.close()
 
 
+def test_time_limit_shortens_vector_episodes_as_it_does_single_ones():
+    # make_vec passes the id's max_episode_steps too: the smaller limit ends the episodes
+    for kwargs in ({"time_limit": 7}, {"max_episode_steps": 7}):
+        v = gym.make_vec(ENV, num_envs=2, vectorization_mode="vector_entry_point", **kwargs)
+        v.reset(seed=0)
+        ends = [v.step(np.zeros((2, 3), np.float32))[3].all() for _ in range(7)]
+        assert ends == [False] * 6 + [True], kwargs
+        v.close()
+
+
+def test_gymnasium_vector_conventions():
+    v = gym.make_vec(ENV, num_envs=3, vectorization_mode="vector_entry_point", autoreset_mode=gym.vector.AutoresetMode.SAME_STEP,
+                     time_limit=4)
+    assert v.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    # a list with None: those draw from the vector's generator; the others are as given
+    a, _ = v.reset(seed=[5, None, 7])
+    b, _ = v.reset(seed=[5, 6, 7])
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[2], b[2])
+    for _ in range(4):
+        obs, _, _, truncated, info = v.step(np.zeros((3, 3), np.float32))
+    assert truncated.all() and info["_final_info"].all()
+    final = info["final_info"]
+    assert list(final["shieldnav_episode"]["steps"]) == [4, 4, 4] and final["_cost"].all() and "H" in final
+    v.close()
+    with pytest.raises(gym.error.ClosedEnvironmentError):
+        v.step(np.zeros((3, 3), np.float32))
+
+
 def test_same_step_mode_returns_the_final_observation():
     v = CorridorInspectionVectorEnv(2, preset="constricted_passage", autoreset_mode="same_step", max_episode_steps=5)
     assert v.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import gymnasium as gym
@@ -118,6 +119,8 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
             raise InvalidArgumentError(
                 f"invalid `render_mode`: expected one of {self.metadata['render_modes']} or None, got {render_mode!r}"
             )
+        # (a path may start with ~, as in a shell)
+        map_path, scenario_path = (None if p is None else os.path.expanduser(p) for p in (map_path, scenario_path))
         self._site = dict(preset=preset, procedural=procedural, ros_map=map_path, scenario=scenario_path)
         self._episode = Episode(**self._site, seed=0, **config)
         self.config = {**ENV_DEFAULTS, **config}
@@ -130,12 +133,16 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         self.resets = 0
         n = self._episode.observation_len
         bins = n - 9
-        # the odometry change is unbounded in principle (a jump); the command is within the
-        # shield's box, which may be wider than the tracker's limits
+        # the odometry change is unbounded in principle (a jump); the command (body frame,
+        # scaled by the tracker's limits) is at most as long as the shield's box, the tracker's
+        # limits or the controller's box (world and waypoint actions; turned into the body
+        # frame, so by length), and its yaw rate within the tracker's or the controller's
         big = _POSE_BOUND
-        box = np.asarray(self.config["u_max"] if self.config["u_max"] is not None else self.config["v_max"], float)
-        ratio = max(1.0, float(np.max(box / np.asarray(self.config["v_max"], float))))
-        cmd = np.array([ratio, ratio, 1.0])
+        c = self.config
+        v_max = np.asarray(c["v_max"], float)
+        box = np.asarray(c["u_max"] if c["u_max"] is not None else c["v_max"], float)
+        reach = max(np.hypot(*box), np.hypot(*v_max), np.hypot(*np.asarray(c["controller_u_max"], float)))
+        cmd = np.array([*(reach / v_max), max(1.0, float(c["omega_max"]) / float(c["w_max"]))])
         low = np.concatenate([np.zeros(bins), [-big, -big, -np.pi], -np.ones(3), -cmd]).astype(np.float32)
         high = np.concatenate([np.ones(bins), [big, big, np.pi], np.ones(3), cmd]).astype(np.float32)
         flat = spaces.Box(low, high, dtype=np.float32)

@@ -32,7 +32,8 @@ class ShieldnavVecEnv(VecEnv):
     """``ShieldnavVecEnv("shieldnav/CorridorInspection-v0", num_envs=8, shield="composite")``.
 
     Keywords are those of the registered id (its registration kwargs are the defaults) plus
-    ``threads``; the id's time limit applies.
+    ``threads``; episodes end at the smaller of the id's ``max_episode_steps`` and
+    ``time_limit`` (either one shortens them, as for the vector environment).
     """
 
     def __init__(self, env_id: str, num_envs: int = 1, threads: int | None = None, **kwargs: Any) -> None:

@@ -49,13 +49,21 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
 
     Arguments are those of the single environment (site, configuration keys) plus
     ``num_envs``, ``autoreset_mode`` (``"next_step"``, Gymnasium's default, or
-    ``"same_step"``), ``threads`` (worker threads; default: the usable cores) and
-    ``max_episode_steps`` (the time limit, applied in Rust). Only the flat observation.
+    ``"same_step"``, or the ``gymnasium.vector.AutoresetMode`` of either), ``threads`` (worker
+    threads; default: the usable cores) and ``max_episode_steps``. Episodes end at the smaller
+    of ``max_episode_steps`` and ``time_limit`` (applied in Rust), as a single environment's
+    do under Gymnasium's ``TimeLimit``: either one shortens them. Only the flat observation.
 
     ``info`` holds one array per key (``cost``, ``clearance``, ``H``, ``h_min``, ...) with its
-    ``_key`` mask, and ``episode`` (the episode totals of sub-environments whose episode ended,
-    masked by ``_episode``). In ``"same_step"`` mode ``info["final_obs"]`` holds the last
-    observation of those episodes.
+    ``_key`` mask, and ``shieldnav_episode`` (the episode totals of sub-environments whose
+    episode ended, masked by ``_shieldnav_episode``). In ``"same_step"`` mode
+    ``info["final_obs"]`` holds the last observation of those episodes and
+    ``info["final_info"]`` (masked by ``_final_info``) their last step's info with the totals.
+
+    ``reset(seed=...)``: an int (sub-environment ``i`` gets ``seed + i``), a list (``None``
+    entries draw a seed from the vector's generator), or ``None`` (every sub-environment gets a
+    seed from that generator: deterministic after a seeded reset, but not what ``N`` single
+    environments continuing their own generators would draw).
     """
 
     def __init__(
@@ -77,14 +85,18 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
     ) -> None:
         if not isinstance(num_envs, int) or num_envs < 1:
             raise InvalidArgumentError(f"invalid `num_envs`: must be a positive integer, got {num_envs!r}")
+        if isinstance(autoreset_mode, AutoresetMode):
+            autoreset_mode = {v: k for k, v in _MODES.items()}.get(autoreset_mode, autoreset_mode.value)
         if autoreset_mode not in _MODES:
-            raise InvalidArgumentError(f"invalid `autoreset_mode`: expected one of {sorted(_MODES)}, got {autoreset_mode!r}")
+            raise InvalidArgumentError(f"invalid `autoreset_mode`: expected one of {sorted(_MODES)} (or their AutoresetMode), got {autoreset_mode!r}")
         if observation != "flat":
             raise InvalidArgumentError("invalid `observation`: the vector environment serves the flat observation only")
         if render_mode is not None:
             raise InvalidArgumentError("invalid `render_mode`: render a single environment instead")
         threads = threads if threads is not None else len(os.sched_getaffinity(0))
-        limit = max_episode_steps if max_episode_steps is not None else time_limit
+        limits = [v for v in (max_episode_steps, time_limit) if v is not None]
+        limit = min(limits) if limits else None
+        map_path, scenario_path = (None if p is None else os.path.expanduser(p) for p in (map_path, scenario_path))
         site = dict(preset=preset, procedural=procedural, ros_map=map_path, scenario=scenario_path)
         self._seeds = EpisodeSeeds(num_envs)
         first = self._seeds.reseed(list(range(num_envs)))
@@ -104,7 +116,9 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         single.close()
 
     def reset(self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        super().reset(seed=seed if seed is None or isinstance(seed, int) else int(seed[0]))
+        self._check_open()
+        first = seed if seed is None or isinstance(seed, int) else next((int(s) for s in seed if s is not None), None)
+        super().reset(seed=first)
         if options:
             raise InvalidArgumentError(f"invalid `options`: reset takes no options, got {sorted(options)}")
         if seed is None:
@@ -114,7 +128,7 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         else:
             if len(seed) != self.num_envs:
                 raise InvalidArgumentError(f"invalid `seed`: expected {self.num_envs} seeds, got {len(seed)}")
-            seeds = [int(s) for s in seed]
+            seeds = [int(s) if s is not None else int(self.np_random.integers(0, 2**31)) for s in seed]
         obs = self._batch.reset(self._seeds.reseed(seeds))
         self._next = self._seeds.draw(np.ones(self.num_envs, bool))
         return obs, {}
@@ -122,6 +136,7 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         # every sub-environment that may reset in this call gets its next seed; only those
         # that do reset consume it, exactly as a single environment would
+        self._check_open()
         obs, reward, terminated, truncated, raw, final_obs, reset = self._batch.step(np.asarray(actions), self._next)
         self._consume(reset)
         info = self._info(raw, reset, final_obs)
@@ -150,7 +165,14 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
             if self._mode == "same_step":
                 info["final_obs"] = final_obs
                 info["_final_obs"] = mask
+                # (Gymnasium's same-step contract: the ended episodes' last step info)
+                info["final_info"] = {k: v for k, v in info.items() if k not in ("final_obs", "_final_obs")}
+                info["_final_info"] = mask
         return info
+
+    def _check_open(self) -> None:
+        if self._batch is None:
+            raise gym.error.ClosedEnvironmentError("the vector environment is closed")
 
     def summary(self, i: int) -> dict[str, Any]:
         """Totals of sub-environment ``i``'s current episode."""

@@ -246,7 +246,10 @@ pub fn load_ros_map(yaml: impl AsRef<Path>, options: &RosMapOptions) -> Result<R
         return Err(Error::invalid("wall_height", format!("must be finite and > 0, got {}", options.wall_height)));
     }
     let yaml = yaml.as_ref();
-    let text = std::fs::read_to_string(yaml).map_err(|e| Error::map_file(yaml, "file", e.to_string()))?;
+    let text = std::fs::read_to_string(yaml).map_err(|e| match e.kind() {
+        std::io::ErrorKind::InvalidData => Error::map_file(yaml, "file", "not text: expected the map's map_server YAML file (which names its image), not the image"),
+        _ => Error::map_file(yaml, "file", e.to_string()),
+    })?;
     let meta = parse_ros_yaml(&text, yaml)?;
     let grid = rasterize(&meta).map_err(|e| match e {
         Error::MapFile { path, location, reason } if location == "file" => Error::map_file(yaml, "field image", format!("{path}: {reason}")),
