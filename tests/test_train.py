@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -48,6 +49,26 @@ def test_sb3_adapter_honours_time_limit():
     v.reset()
     dones = [v.step_wait()[2].all() if v.step_async(np.zeros((2, 3), np.float32)) is None else None for _ in range(6)]
     assert dones == [False] * 5 + [True]
+    v.close()
+
+
+def test_sb3_adapter_answers_as_dummy_vec_env_does():
+    from shieldnav.exceptions import InvalidArgumentError
+
+    v = ShieldnavVecEnv("shieldnav/ConstrictedPassage-v0", num_envs=2)
+    assert [s.shape for s in v.get_attr("observation_space")] == [(73,), (73,)]
+    assert [s.shape for s in v.get_attr("action_space")] == [(3,), (3,)]
+    assert v.get_attr("spec")[0].id == "shieldnav/ConstrictedPassage-v0"
+    v.reset()
+    v.step_async(np.zeros((2, 3), np.float32))
+    infos = v.step_wait()[3]
+    single = gym.make("shieldnav/ConstrictedPassage-v0")
+    single.reset(seed=0)
+    assert set(single.step(np.zeros(3, np.float32))[4]) <= set(infos[0])
+    v.set_options({"anything": 1})
+    with pytest.raises(InvalidArgumentError, match="options"):
+        v.reset()
+    v.reset()  # (the options are dropped with the error)
     v.close()
 
 

@@ -21,11 +21,11 @@ except ImportError as err:  # pragma: no cover - exercised only without the extr
 
 import gymnasium as gym
 
+from shieldnav.exceptions import InvalidArgumentError
 from shieldnav.vector import CorridorInspectionVectorEnv
 
-#: Per-step info entries copied into each sub-environment's info dict.
-_KEYS = ("cost", "collision", "clearance", "H", "h_min", "shield_active", "shield_feasible", "intervention",
-         "coverage", "deadlock", "odometry_error", "solve_time_ns", "u_nom", "u_filtered")
+#: Attributes of the vector environment that ``get_attr`` answers per sub-environment.
+_SINGLE = {"observation_space": "single_observation_space", "action_space": "single_action_space"}
 
 
 class ShieldnavVecEnv(VecEnv):
@@ -46,6 +46,9 @@ class ShieldnavVecEnv(VecEnv):
         self._actions: np.ndarray | None = None
 
     def reset(self) -> np.ndarray:
+        if any(self._options):
+            options, self._options = self._options, [{} for _ in range(self.num_envs)]
+            raise InvalidArgumentError(f"invalid `options`: ShieldnavVecEnv's reset takes none, got {options}")
         seeds = None if self._seeds[0] is None else [int(s) for s in self._seeds]
         obs, _ = self.vec.reset(seed=seeds)
         self._reset_seeds()
@@ -60,7 +63,8 @@ class ShieldnavVecEnv(VecEnv):
         dones = terminated | truncated
         infos: list[dict[str, Any]] = []
         for i in range(self.num_envs):
-            d = {k: info[k][i] for k in _KEYS if k in info}
+            # (every per-step entry, as a single environment reports it)
+            d = {k: v[i] for k, v in info.items() if not k.startswith("_") and isinstance(v, np.ndarray) and k != "final_obs"}
             if dones[i]:
                 d["terminal_observation"] = info["final_obs"][i]
                 d["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
@@ -72,7 +76,10 @@ class ShieldnavVecEnv(VecEnv):
         self.vec.close()
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        return [getattr(self.vec, attr_name) for _ in self._get_indices(indices)]
+        if attr_name == "spec":
+            return [gym.spec(self.env_id) for _ in self._get_indices(indices)]
+        value = getattr(self.vec, _SINGLE.get(attr_name, attr_name))
+        return [value for _ in self._get_indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
         raise AttributeError(f"ShieldnavVecEnv sub-environments live in Rust; cannot set {attr_name!r}")
