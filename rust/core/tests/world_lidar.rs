@@ -203,6 +203,30 @@ fn indexed_scan_equals_the_full_scan_bit_for_bit() {
     }
 }
 
+/// A sensor outside the walls' box, farther than the index is wide, still sees them (the
+/// buckets searched were capped at the index's width from the sensor: a 2 m wall seen from
+/// 8 m gave no return).
+#[test]
+fn indexed_scan_from_outside_the_walls_box_equals_the_full_scan() {
+    use shieldnav_core::world::SegmentIndex;
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let worlds = [vec![Segment::new([0.0, 0.0], [2.0, 0.0], 2.0)], preset("constricted_passage").unwrap().map.segments];
+    let mut lidar = Lidar::new(exact(1, 1024)).unwrap();
+    let (mut a, mut b) = (Scan::default(), Scan::default());
+    for walls in worlds {
+        let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        let hi = walls.iter().flat_map(|s| [s.a[1], s.b[1]]).fold(f64::NEG_INFINITY, f64::max);
+        let mut poses = vec![Pose2::new(1.0, hi + 8.0, 0.0), Pose2::new(-12.0, 0.5, 0.3)];
+        poses.extend((0..40).map(|_| Pose2::new(rng.random_range(-18.0..18.0), rng.random_range(hi - 18.0..hi + 18.0), rng.random_range(-3.2..3.2))));
+        for p in poses {
+            lidar.scan_into(&[&walls], p, 0.0, &mut rng, &mut a).unwrap();
+            lidar.scan_indexed_into(&index, &[], p, 0.0, &mut rng, &mut b).unwrap();
+            let (ba, bb): (Vec<u64>, Vec<u64>) = (a.ranges.iter().map(|r| r.to_bits()).collect(), b.ranges.iter().map(|r| r.to_bits()).collect());
+            assert!(ba == bb, "pose {p:?}: {} returns against {}", b.ranges.iter().filter(|r| r.is_finite()).count(), a.ranges.iter().filter(|r| r.is_finite()).count());
+        }
+    }
+}
+
 /// The planar scan by walking a triangulation of the walls gives the full scan's ranges bit
 /// for bit: from random poses (some outside the walls, where it falls back to the index),
 /// with a moving wall, at two ranges; from poses whose beams pass exactly through corners

@@ -110,11 +110,15 @@ fn helper(shared: Arc<Shared>, k: usize) {
     }
 }
 
+/// Most worker threads of a pool (far beyond any machine's cores: a million aborted the
+/// process).
+pub const MAX_THREADS: usize = 1024;
+
 impl Pool {
-    /// Starts `threads − 1` helpers (none for one thread).
+    /// Starts `threads − 1` helpers (none for one thread), at most [`MAX_THREADS`] in all.
     pub(crate) fn new(threads: usize) -> Result<Self> {
-        if threads == 0 {
-            return Err(Error::invalid("threads", "must be at least 1"));
+        if !(1..=MAX_THREADS).contains(&threads) {
+            return Err(Error::invalid("threads", format!("must be from 1 to {MAX_THREADS}, got {threads}")));
         }
         let shared = Arc::new(Shared {
             ticket: AtomicU64::new(0),
@@ -123,16 +127,18 @@ impl Pool {
             shutdown: AtomicBool::new(false),
             sleeping: (1..threads).map(|_| AtomicBool::new(false)).collect(),
         });
-        let mut helpers = Vec::with_capacity(threads - 1);
+        // (the pool owns the helpers from the first: if one cannot start, dropping it stops
+        // those already running)
+        let mut pool = Self { shared, helpers: Vec::with_capacity(threads - 1), call: Mutex::new(()) };
         for k in 0..threads - 1 {
-            let s = Arc::clone(&shared);
+            let s = Arc::clone(&pool.shared);
             let handle = std::thread::Builder::new()
                 .name(format!("shieldnav-batch-{k}"))
                 .spawn(move || helper(s, k))
                 .map_err(|e| Error::invalid("threads", format!("could not start {threads} worker threads: {e}")))?;
-            helpers.push(handle.thread().clone());
+            pool.helpers.push(handle.thread().clone());
         }
-        Ok(Self { shared, helpers, call: Mutex::new(()) })
+        Ok(pool)
     }
 
     /// Runs `f(&mut items[i], i)` for every item, on the helpers and the calling thread. A
@@ -255,6 +261,15 @@ mod tests {
             assert!(e.to_string().contains("episode 12"), "{e}");
         }
         assert!(Pool::new(0).is_err());
+    }
+
+    /// Thread counts beyond the bound are errors naming them (a million aborted the process).
+    #[test]
+    fn thread_counts_are_bounded() {
+        for threads in [0, MAX_THREADS + 1, 1_000_000] {
+            let e = Pool::new(threads).err().expect("an error").to_string();
+            assert!(e.contains("`threads`"), "{e}");
+        }
     }
 
     #[test]

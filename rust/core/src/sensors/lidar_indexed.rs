@@ -385,8 +385,13 @@ impl Lidar {
         self.sweep_extra(extra, sp, &mut out.ranges);
         let cell = index.cell();
         let (nx, ny) = index.dims();
-        // offsets beyond the index's extent are never inside it
-        let r = ((c.max_range / cell).ceil() + 1.0).min(nx.max(ny) as Real) as i32;
+        let origin = index.origin();
+        let ci = ((sp.x - origin[0]) / cell).floor() as i64;
+        let cj = ((sp.y - origin[1]) / cell).floor() as i64;
+        // offsets beyond the index's extent as seen from the sensor's bucket are never inside
+        // it (a sensor outside the walls' box is that much farther from its far side)
+        let outside = [-ci, ci - (nx as i64 - 1), -cj, cj - (ny as i64 - 1)].into_iter().fold(0i64, i64::max);
+        let r = ((c.max_range / cell).ceil() + 1.0).min(nx.max(ny) as Real + outside as Real) as i32;
         let key = (cell.to_bits(), c.max_range.to_bits(), r);
         if scratch.key != key || scratch.offsets.is_empty() {
             let lb = |d: i32| ((d.abs() - 1).max(0) as Real) * cell;
@@ -403,9 +408,6 @@ impl Lidar {
             scratch.offsets = offs.into_iter().map(|(_, i, j)| (i, j)).collect();
             scratch.key = key;
         }
-        let origin = index.origin();
-        let ci = ((sp.x - origin[0]) / cell).floor() as i64;
-        let cj = ((sp.y - origin[1]) / cell).floor() as i64;
         let mut stats = IndexedScanStats::default();
         let mut beams = std::mem::take(&mut scratch.beams);
         let lanes = index.lanes();

@@ -62,11 +62,12 @@ impl SegmentIndex {
             lo = [0.0, 0.0];
             hi = [0.0, 0.0];
         }
-        let nx = ((hi[0] - lo[0]) / cell).floor() as usize + 1;
-        let ny = ((hi[1] - lo[1]) / cell).floor() as usize + 1;
-        if nx.saturating_mul(ny) > 50_000_000 {
-            return Err(Error::invalid("cell", format!("{cell} m gives {nx} x {ny} buckets; use a larger cell")));
+        // (counted in floating point: a tiny cell or far walls overflow any integer)
+        let (fx, fy) = (((hi[0] - lo[0]) / cell).floor() + 1.0, ((hi[1] - lo[1]) / cell).floor() + 1.0);
+        if !(fx * fy <= 50_000_000.0) {
+            return Err(Error::invalid("cell", format!("{cell} m gives {fx:e} x {fy:e} buckets over the walls' extent; use a larger cell")));
         }
+        let (nx, ny) = (fx as usize, fy as usize);
         let range = |s: &Segment| {
             let i0 = ((s.a[0].min(s.b[0]) - lo[0]) / cell).floor() as usize;
             let i1 = ((s.a[0].max(s.b[0]) - lo[0]) / cell).floor() as usize;
@@ -466,6 +467,20 @@ mod tests {
         let edge = vec![Segment::new([0.0, -3.9], [30.0, -3.9], 2.0), Segment::new([23.8, -0.9], [30.0, -0.9], 2.0)];
         for (walls, cell) in [(walls, 1.5), (edge, 1.0)] {
             check_pieces(&walls, cell);
+        }
+    }
+
+    /// A tiny cell or walls far apart are an error naming the cell (the bucket count
+    /// overflowed and the index panicked).
+    #[test]
+    fn too_many_buckets_is_an_error_not_a_panic() {
+        for (walls, cell) in [
+            (vec![Segment::new([0.0, 0.0], [10.0, 0.0], 2.0)], 1e-300),
+            (vec![Segment::new([-1e20, 0.0], [1e20, 0.0], 2.0)], 1.0),
+            (vec![Segment::new([0.0, 0.0], [1e5, 1e5], 2.0)], 0.01),
+        ] {
+            let e = SegmentIndex::new(walls, cell).unwrap_err().to_string();
+            assert!(e.contains("`cell`"), "{e}");
         }
     }
 
