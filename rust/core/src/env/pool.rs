@@ -267,7 +267,10 @@ mod tests {
     #[test]
     fn thread_counts_are_bounded() {
         for threads in [0, MAX_THREADS + 1, 1_000_000] {
-            let e = Pool::new(threads).err().expect("an error").to_string();
+            let e = match Pool::new(threads) {
+                Ok(_) => panic!("{threads} threads accepted"),
+                Err(e) => e.to_string(),
+            };
             assert!(e.contains("`threads`"), "{e}");
         }
     }

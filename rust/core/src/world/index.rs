@@ -64,7 +64,7 @@ impl SegmentIndex {
         }
         // (counted in floating point: a tiny cell or far walls overflow any integer)
         let (fx, fy) = (((hi[0] - lo[0]) / cell).floor() + 1.0, ((hi[1] - lo[1]) / cell).floor() + 1.0);
-        if !(fx * fy <= 50_000_000.0) {
+        if fx * fy > 50_000_000.0 {
             return Err(Error::invalid("cell", format!("{cell} m gives {fx:e} x {fy:e} buckets over the walls' extent; use a larger cell")));
         }
         let (nx, ny) = (fx as usize, fy as usize);
