@@ -25,9 +25,9 @@ fn closed_form_matches_clarabel_with_and_without_box() {
         let b = g.random_range(-2.0..4.0);
         let bound: Vec<f64> = (0..d).map(|_| g.random_range(0.3..1.5)).collect();
         for u_max in [None, Some(bound.as_slice())] {
-            let fast = project_halfspace_box(&u_nom, &row, b, u_max, 1e-12);
+            let fast = project_halfspace_box(&u_nom, &row, b, u_max, 1e-12).unwrap();
             let mut rows = LinearConstraints::new(d);
-            rows.push(&row, b);
+            rows.push(&row, b).unwrap();
             let slow = solve_rows(&u_nom, &rows, u_max).unwrap();
             assert_eq!(fast.feasible, slow.feasible, "trial {trial}");
             if fast.feasible {
@@ -296,6 +296,28 @@ fn distance_baseline_stops_for_a_point_at_the_centre() {
     // a point just off the centre has a direction to help: the command moves away from it
     let o = shield(ShieldMethod::Distance).filter(&Scan::new_f64(&[0.1, 0.0], 2).unwrap(), &st, &[1.0, 0.0]).unwrap();
     assert!(o.active && o.u[0] < 0.0, "{o:?}");
+}
+
+/// The public QP functions check their arguments' lengths and values (they indexed out of
+/// bounds, clamped with min > max, or returned NaN marked feasible).
+#[test]
+fn public_qp_functions_name_bad_arguments() {
+    let err = |r: shieldnav_core::Result<_>| r.map(|_: shieldnav_core::shield::QpSolution| ()).unwrap_err().to_string();
+    assert!(err(project_halfspace_box(&[1.0; 4], &[1.0; 4], 0.0, None, 1e-9)).contains("u_nom"));
+    assert!(err(project_halfspace_box(&[1.0, 0.0], &[1.0], 0.0, None, 1e-9)).contains("`g`"));
+    assert!(err(project_halfspace_box(&[1.0, 0.0], &[1.0, 0.0], 0.0, Some(&[1.0]), 1e-9)).contains("u_max"));
+    assert!(err(project_halfspace_box(&[1.0, 0.0], &[1.0, 0.0], 0.0, Some(&[-1.0, 1.0]), 1e-9)).contains("u_max"));
+    assert!(err(project_halfspace_box(&[1.0, 0.0], &[1.0, 0.0], f64::NAN, None, 1e-9)).contains("`g`"));
+    let mut rows = LinearConstraints::new(2);
+    assert!(rows.push(&[1.0, 2.0, 3.0], 0.0).unwrap_err().to_string().contains("extra_A"));
+    assert!(rows.push(&[1.0, f64::NAN], 0.0).is_err() && rows.is_empty());
+    rows.push(&[1.0, 0.0], 0.5).unwrap();
+    assert!(rows.extend(&LinearConstraints::new(3)).is_err());
+    assert!(err(solve_rows(&[1.0; 4], &rows, None)).contains("u_nom"));
+    assert!(err(solve_rows(&[f64::NAN, 0.0], &rows, None)).contains("u_nom"));
+    assert!(err(solve_rows(&[1.0, 0.0], &rows, Some(&[1.0]))).contains("u_max"));
+    let u = solve_rows(&[0.0, 0.0], &rows, None).unwrap().u;
+    assert!((u[0] - 0.5).abs() < 1e-6 && u[1].abs() < 1e-6, "{u:?}");
 }
 
 #[test]

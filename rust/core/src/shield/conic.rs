@@ -41,18 +41,27 @@ impl LinearConstraints {
         Ok(Self { dim, rows: a.to_vec(), rhs: c.to_vec() })
     }
 
-    /// Appends `aᵀu ≥ c`.
-    pub fn push(&mut self, a: &[f64], c: f64) {
-        debug_assert_eq!(a.len(), self.dim);
+    /// Appends `aᵀu ≥ c` (`a` of the rows' dimension, every value finite).
+    pub fn push(&mut self, a: &[f64], c: f64) -> Result<()> {
+        if a.len() != self.dim {
+            return Err(Error::DimensionMismatch { name: "extra_A", expected: self.dim, got: a.len() });
+        }
+        if !a.iter().all(|v| v.is_finite()) || !c.is_finite() {
+            return Err(Error::invalid("extra_A", format!("a row must be finite, got {a:?} ≥ {c}")));
+        }
         self.rows.extend_from_slice(a);
         self.rhs.push(c);
+        Ok(())
     }
 
-    /// Appends every row of `other`.
-    pub fn extend(&mut self, other: &LinearConstraints) {
-        debug_assert_eq!(other.dim, self.dim);
+    /// Appends every row of `other` (of the same dimension).
+    pub fn extend(&mut self, other: &LinearConstraints) -> Result<()> {
+        if other.dim != self.dim {
+            return Err(Error::DimensionMismatch { name: "extra_A", expected: self.dim, got: other.dim });
+        }
         self.rows.extend_from_slice(&other.rows);
         self.rhs.extend_from_slice(&other.rhs);
+        Ok(())
     }
 
     /// Removes all rows, keeping the allocation.
@@ -77,6 +86,10 @@ impl LinearConstraints {
     }
 
     /// Row `k` as `(a_k, c_k)`.
+    ///
+    /// # Panics
+    ///
+    /// If `k` is not below [`LinearConstraints::len`], as slice indexing does.
     pub fn row(&self, k: usize) -> (&[f64], f64) {
         (&self.rows[k * self.dim..(k + 1) * self.dim], self.rhs[k])
     }
@@ -164,6 +177,7 @@ fn solved(s: SolverStatus) -> bool {
 
 /// Solves the many-row filter QP with Clarabel (see the module docs for the fallback).
 pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>) -> Result<QpSolution> {
+    super::qp::check_command(u_nom, u_max)?;
     let d = u_nom.len();
     if rows.dim() != d {
         return Err(Error::DimensionMismatch { name: "extra_A", expected: d, got: rows.dim() });
@@ -207,7 +221,7 @@ pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>
     let mut relaxed = LinearConstraints::new(d);
     for k in 0..m {
         let (row, c) = rows.row(k);
-        relaxed.push(row, c - t_star - 1e-9 * (1.0 + t_star));
+        relaxed.push(row, c - t_star - 1e-9 * (1.0 + t_star))?;
     }
     let (status, x2) = run(&p, &q, &build(&relaxed, d, u_max, &[]), &rhs(&relaxed, u_max))?;
     let src = if solved(status) { &x2 } else { &x };

@@ -15,9 +15,10 @@
 use crate::error::{Error, Result};
 use crate::math::{cross, dot, mat_mul, mat_t_vec, mat_vec, skew, Mat3, Real, Vec3};
 
-/// Least and greatest semi-axis (m): `1/a²` and the points' `pᵀ A p` stay far from
-/// overflow and underflow in both the f64 and the f32 kernels.
+/// Least semi-axis (m): `1/a²` and the points' `pᵀ A p` stay far from overflow in both the
+/// f64 and the f32 kernels.
 pub const MIN_SEMI_AXIS: Real = 1e-3;
+/// Greatest semi-axis (m): `1/a²` stays far from underflow.
 pub const MAX_SEMI_AXIS: Real = 1e3;
 
 /// An axis-aligned ellipsoid in the body frame, centred on the robot: planar (`a_x, a_y`) or

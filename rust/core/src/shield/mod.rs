@@ -30,10 +30,10 @@ use std::time::Instant;
 
 pub use composite::{evaluate_composite, evaluate_composite_moved, CompositeBarrier, CompositeParams, Motion, SimdLevel};
 pub use conic::{solve_rows, LinearConstraints};
-pub use ellipsoid::Envelope;
+pub use ellipsoid::{Envelope, MAX_SEMI_AXIS, MIN_SEMI_AXIS};
 pub use lane::Lane;
 pub use qp::{project_halfspace_box, QpSolution};
-pub use scan::{select_points, ScanFilter, ScanScratch};
+pub use scan::{select_points, ScanFilter, ScanScratch, MAX_ANGULAR_BINS};
 
 use crate::error::{Error, Result};
 use crate::math::{det, mat_vec, orthonormality_error, rot_z, Mat3, Vec3};
@@ -431,7 +431,7 @@ impl Shield {
                     let d = to_world(&[p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]);
                     let h = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - sd2;
                     let g = [-2.0 * d[0], -2.0 * d[1], -2.0 * d[2]];
-                    self.rows.push(&g[..dim], -alpha * h);
+                    self.rows.push(&g[..dim], -alpha * h)?;
                     // a violated row no direction helps (a point at the robot's centre)
                     stuck |= -alpha * h > 0.0 && (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt() <= self.config.grad_eps;
                     if h < h_min {
@@ -439,7 +439,7 @@ impl Shield {
                     }
                 }
                 if let Some(e) = extra {
-                    self.rows.extend(e);
+                    self.rows.extend(e)?;
                 }
                 // stop, as the composite does with a vanishing gradient (see `qp`)
                 let sol = if stuck { QpSolution { u: [0.0; 3], active: true, feasible: false } } else { solve_rows(u_nom, &self.rows, u_max.as_deref())? };
@@ -576,13 +576,13 @@ impl Shield {
     fn solve_row(&mut self, u_nom: &[f64], g: &Vec3, b: f64, u_max: Option<&[f64]>, extra: Option<&LinearConstraints>) -> Result<QpSolution> {
         let dim = self.dim();
         match extra {
-            None => Ok(project_halfspace_box(u_nom, &g[..dim], b, u_max, self.config.grad_eps)),
+            None => Ok(qp::project_checked(u_nom, &g[..dim], b, u_max, self.config.grad_eps)),
             Some(e) => {
                 self.rows.clear();
                 if b.is_finite() {
-                    self.rows.push(&g[..dim], b);
+                    self.rows.push(&g[..dim], b)?;
                 }
-                self.rows.extend(e);
+                self.rows.extend(e)?;
                 solve_rows(u_nom, &self.rows, u_max)
             }
         }

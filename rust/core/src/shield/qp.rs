@@ -19,6 +19,8 @@
 //!
 //! Both report `feasible = false`; `u_nom` is never returned silently.
 
+use crate::error::{Error, Result};
+
 /// The solution of one filter QP.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct QpSolution {
@@ -37,16 +39,50 @@ fn dot_d(g: &[f64], u: &[f64]) -> f64 {
 }
 
 /// Solves `min ‖u − u_nom‖² s.t. gᵀu ≥ b` and, with `u_max`, `|u_j| ≤ u_max_j`, exactly.
-/// `u_nom`, `g` and `u_max` have the same length `d ∈ {1, 2, 3}`.
+/// `u_nom`, `g` and `u_max` have the same length `d ∈ {1, 2, 3}`, every value finite, `u_max`
+/// ≥ 0 and `grad_eps` ≥ 0; else an error naming the argument.
 ///
 /// ```
 /// use shieldnav_core::shield::project_halfspace_box;
 /// // keep u_y ≥ 0.5 while asking for (1, 0), inside |u| ≤ 1
-/// let s = project_halfspace_box(&[1.0, 0.0], &[0.0, 1.0], 0.5, Some(&[1.0, 1.0]), 1e-9);
+/// let s = project_halfspace_box(&[1.0, 0.0], &[0.0, 1.0], 0.5, Some(&[1.0, 1.0]), 1e-9).unwrap();
 /// assert_eq!(&s.u[..2], &[1.0, 0.5]);
 /// assert!(s.active && s.feasible);
 /// ```
-pub fn project_halfspace_box(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[f64]>, grad_eps: f64) -> QpSolution {
+pub fn project_halfspace_box(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[f64]>, grad_eps: f64) -> Result<QpSolution> {
+    check_command(u_nom, u_max)?;
+    let d = u_nom.len();
+    if g.len() != d {
+        return Err(Error::DimensionMismatch { name: "g", expected: d, got: g.len() });
+    }
+    if !g.iter().all(|v| v.is_finite()) || !b.is_finite() {
+        return Err(Error::invalid("g", format!("the row g·u ≥ b must be finite, got g = {g:?}, b = {b}")));
+    }
+    if !(grad_eps.is_finite() && grad_eps >= 0.0) {
+        return Err(Error::invalid("grad_eps", format!("must be finite and ≥ 0, got {grad_eps}")));
+    }
+    Ok(project_checked(u_nom, g, b, u_max, grad_eps))
+}
+
+/// That `u_nom` (of 1 to 3 finite values) and `u_max` (as many, finite and ≥ 0) fit together.
+pub(crate) fn check_command(u_nom: &[f64], u_max: Option<&[f64]>) -> Result<()> {
+    let d = u_nom.len();
+    if !(1..=3).contains(&d) || !u_nom.iter().all(|v| v.is_finite()) {
+        return Err(Error::invalid("u_nom", format!("expected 1 to 3 finite values, got {u_nom:?}")));
+    }
+    if let Some(m) = u_max {
+        if m.len() != d {
+            return Err(Error::DimensionMismatch { name: "u_max", expected: d, got: m.len() });
+        }
+        if !m.iter().all(|v| v.is_finite() && *v >= 0.0) {
+            return Err(Error::invalid("u_max", format!("must be finite and ≥ 0, got {m:?}")));
+        }
+    }
+    Ok(())
+}
+
+/// [`project_halfspace_box`] on checked arguments.
+pub(crate) fn project_checked(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[f64]>, grad_eps: f64) -> QpSolution {
     let d = u_nom.len();
     debug_assert!(d <= 3 && g.len() == d && u_max.is_none_or(|m| m.len() == d));
     let mut u = [0.0; 3];
@@ -123,7 +159,7 @@ mod tests {
     #[test]
     fn clamp_after_projection_is_not_the_optimum() {
         // g = (1, 1)/√2 style row: u_x + u_y ≥ 1.5 from u_nom = (1.5, −1) in |u| ≤ 1.
-        let s = project_halfspace_box(&[1.5, -1.0], &[1.0, 1.0], 1.5, Some(&[1.0, 1.0]), 1e-9);
+        let s = project_halfspace_box(&[1.5, -1.0], &[1.0, 1.0], 1.5, Some(&[1.0, 1.0]), 1e-9).unwrap();
         assert!(s.feasible && s.active);
         assert!((s.u[0] - 1.0).abs() < 1e-12 && (s.u[1] - 0.5).abs() < 1e-12, "{:?}", s.u);
         // naive: project (μ = 1) → (2.5, 0), then clamp → (1, 0), which violates the row
@@ -133,21 +169,21 @@ mod tests {
 
     #[test]
     fn infeasible_box_returns_least_violating_command() {
-        let s = project_halfspace_box(&[0.3, 0.2], &[1.0, -2.0], 5.0, Some(&[1.0, 0.5]), 1e-9);
+        let s = project_halfspace_box(&[0.3, 0.2], &[1.0, -2.0], 5.0, Some(&[1.0, 0.5]), 1e-9).unwrap();
         assert!(!s.feasible);
         assert_eq!(&s.u[..2], &[1.0, -0.5]);
     }
 
     #[test]
     fn vanishing_gradient_with_violation_stops() {
-        let s = project_halfspace_box(&[0.3, 0.2], &[0.0, 0.0], 0.1, None, 1e-9);
+        let s = project_halfspace_box(&[0.3, 0.2], &[0.0, 0.0], 0.1, None, 1e-9).unwrap();
         assert!(!s.feasible && s.active);
         assert_eq!(s.u, [0.0; 3]);
     }
 
     #[test]
     fn unconstrained_when_row_holds() {
-        let s = project_halfspace_box(&[0.3, 0.2, -0.1], &[1.0, 0.0, 0.0], -1.0, None, 1e-9);
+        let s = project_halfspace_box(&[0.3, 0.2, -0.1], &[1.0, 0.0, 0.0], -1.0, None, 1e-9).unwrap();
         assert!(s.feasible && !s.active);
         assert_eq!(&s.u, &[0.3, 0.2, -0.1]);
     }

@@ -44,11 +44,14 @@ impl Drop for OccupancyGrid {
     }
 }
 
+/// Most cells of a grid (a 50 × 50 km site at 5 cm; one byte each).
+pub const MAX_CELLS: usize = 1 << 40;
+
 impl OccupancyGrid {
-    /// A `width × height` grid filled with `fill`.
+    /// A `width × height` grid filled with `fill` (at most [`MAX_CELLS`] cells).
     pub fn new(width: usize, height: usize, resolution: Real, origin: Pose2, fill: Cell) -> Result<Self> {
-        if width == 0 || height == 0 {
-            return Err(Error::invalid("grid", format!("size must be positive, got {width} x {height}")));
+        if width == 0 || height == 0 || width.checked_mul(height).is_none_or(|n| n > MAX_CELLS) {
+            return Err(Error::invalid("grid", format!("size must be positive and at most {MAX_CELLS} cells, got {width} x {height}")));
         }
         if !(resolution.is_finite() && resolution > 0.0) {
             return Err(Error::invalid("resolution", format!("must be finite and > 0, got {resolution}")));
@@ -61,12 +64,20 @@ impl OccupancyGrid {
     }
 
     /// The cell `(i, j)`.
+    ///
+    /// # Panics
+    ///
+    /// If `(i, j)` lies outside the grid, as slice indexing does (see [`OccupancyGrid::world_to_cell`]).
     #[inline]
     pub fn get(&self, i: usize, j: usize) -> Cell {
         self.cells[j * self.width + i]
     }
 
     /// Sets the cell `(i, j)`.
+    ///
+    /// # Panics
+    ///
+    /// If `(i, j)` lies outside the grid, as slice indexing does.
     #[inline]
     pub fn set(&mut self, i: usize, j: usize, c: Cell) {
         self.cells[j * self.width + i] = c;

@@ -27,7 +27,7 @@ pub use map::StaticMap;
 pub use moving::{MovingObstacle, Trajectory};
 pub use preset::{preset, PRESET_NAMES};
 pub use rosmap::{load_ros_map, RosMap, RosMapOptions};
-pub use scenario::{Scenario, COORDINATE_LIMIT};
+pub use scenario::{Scenario, COORDINATE_LIMIT, TIME_LIMIT, YAW_LIMIT};
 pub use sim::{StepOutcome, World, WorldConfig, CLEARANCE_BUDGET, CLEARANCE_SEARCH, FREE_STEP_MARGIN, SCAN_ALL_WALLS_MAX, SCAN_PROBE_EVERY, SCAN_PROBE_MAX, SCAN_PROBE_SLOWER};
 pub use grid::{Cell, OccupancyGrid};
 pub use traverse::{footprint_reachability, Footprint, Reachability};
