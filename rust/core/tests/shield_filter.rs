@@ -241,6 +241,8 @@ fn bad_inputs_are_errors_naming_the_argument() {
     bad(ShieldConfig { semi_axes: vec![0.9, 0.45, 2e3], ..ShieldConfig::default() }, "semi_axes");
     // (κ = 1e100 returned a NaN command marked feasible)
     bad(ShieldConfig { kappa: 1e100, ..ShieldConfig::default() }, "kappa");
+    bad(ShieldConfig { kappa: 1e-300, ..ShieldConfig::default() }, "kappa");
+    bad(ShieldConfig { gamma: 1e300, ..ShieldConfig::default() }, "gamma");
     let mut sharp = Shield::new(ShieldConfig { kappa: 1e6, ..ShieldConfig::default() }).unwrap();
     let wall: Vec<f64> = (0..81).flat_map(|k| [1.0, -2.0 + 0.05 * k as f64]).collect();
     let o = sharp.filter(&Scan::new_f64(&wall, 2).unwrap(), &BodyState::planar(0.0, 0.0).unwrap(), &[1.0, 1.0]).unwrap();

@@ -203,6 +203,23 @@ fn indexed_scan_equals_the_full_scan_bit_for_bit() {
     }
 }
 
+/// A non-finite stamp or wall is an error naming it (a NaN wall was skipped, a NaN height
+/// scanned, silently).
+#[test]
+fn non_finite_stamps_and_walls_are_errors() {
+    let mut lidar = Lidar::new(exact(1, 1024)).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let mut out = Scan::default();
+    let good = [Segment::new([1.0, -1.0], [1.0, 1.0], 2.0)];
+    let e = lidar.scan_into(&[&good], Pose2::new(0.0, 0.0, 0.0), f64::NAN, &mut rng, &mut out).unwrap_err().to_string();
+    assert!(e.contains("`stamp`"), "{e}");
+    for bad in [Segment::new([1.0, f64::NAN], [1.0, 1.0], 2.0), Segment::new([1.0, -1.0], [1.0, 1.0], f64::NAN)] {
+        let e = lidar.scan_into(&[&good, &[bad]], Pose2::new(0.0, 0.0, 0.0), 0.0, &mut rng, &mut out).unwrap_err().to_string();
+        assert!(e.contains("`walls`"), "{e}");
+    }
+    lidar.scan_into(&[&good], Pose2::new(0.0, 0.0, 0.0), 0.0, &mut rng, &mut out).unwrap();
+}
+
 /// A sensor outside the walls' box, farther than the index is wide, still sees them (the
 /// buckets searched were capped at the index's width from the sensor: a 2 m wall seen from
 /// 8 m gave no return).

@@ -239,6 +239,10 @@ impl Lidar {
     }
 
     /// Unit direction of column `i`, channel `k` in the sensor frame.
+    ///
+    /// # Panics
+    ///
+    /// If `k` is not below the channels or `i` not below the columns, as slice indexing does.
     pub fn beam_direction(&self, k: usize, i: usize) -> [Real; 3] {
         [self.el_cos[k] * self.az_cos[i], self.el_cos[k] * self.az_sin[i], self.el_sin[k]]
     }
@@ -247,6 +251,9 @@ impl Lidar {
     /// the sensor's world pose. Shared by every scan entry point.
     pub(crate) fn begin_scan(&self, body: Pose2, stamp: Real, out: &mut Scan) -> Result<Pose2> {
         body.validate("pose")?;
+        if !stamp.is_finite() {
+            return Err(Error::invalid("stamp", format!("must be finite, got {stamp}")));
+        }
         let c = self.config;
         out.channels = c.channels;
         out.columns = c.columns;
@@ -263,6 +270,11 @@ impl Lidar {
     /// buffers.
     pub fn scan_into<R: Rng + ?Sized>(&mut self, walls: &[&[Segment]], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
         let sp = self.begin_scan(body, stamp, out)?;
+        // (the walls are the caller's, new each call: a wall with a NaN end or height would be
+        // skipped or scanned silently)
+        if let Some(s) = walls.iter().flat_map(|w| w.iter()).find(|s| !(s.a.iter().chain(&s.b).all(|v| v.is_finite()) && s.height.is_finite())) {
+            return Err(Error::invalid("walls", format!("every end point and height must be finite, got {s:?}")));
+        }
         // (an AVX2 build of this sweep measured slower, unlike the indexed one)
         self.sweep_walls(walls, sp, out);
         self.finish(rng, out);

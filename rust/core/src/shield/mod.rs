@@ -289,6 +289,11 @@ pub struct Shield {
 /// Largest soft-min sharpness `κ`: beyond it the weights' products overflow (κ = 1e100 gave a
 /// NaN command), and the soft-min equals the hard min to every digit long before.
 pub const MAX_KAPPA: f64 = 1e6;
+/// Least `κ`: the soft-min's offset `(γ/κ) ln N` grows as `1/κ` (κ = 1e-300 asked for
+/// commands of 1e300 m/s).
+pub const MIN_KAPPA: f64 = 1e-3;
+/// Largest saturation `γ` (m² of `h`): beyond, `γ tanh(h/γ)` is `h` to every digit.
+pub const MAX_GAMMA: f64 = 1e6;
 
 impl Shield {
     /// Validates `config`; every error names the field at fault.
@@ -296,8 +301,11 @@ impl Shield {
         let envelope = Envelope::new(&config.semi_axes)?;
         positive("gamma", config.gamma)?;
         positive("kappa", config.kappa)?;
-        if config.kappa > MAX_KAPPA {
-            return Err(Error::invalid("kappa", format!("must be at most {MAX_KAPPA:e} (the soft-min is the hard min long before), got {:e}", config.kappa)));
+        if !(MIN_KAPPA..=MAX_KAPPA).contains(&config.kappa) {
+            return Err(Error::invalid("kappa", format!("must be from {MIN_KAPPA:e} to {MAX_KAPPA:e} (beyond, the soft-min is the hard min to every digit), got {:e}", config.kappa)));
+        }
+        if config.gamma > MAX_GAMMA {
+            return Err(Error::invalid("gamma", format!("must be at most {MAX_GAMMA:e} (the saturation γ tanh(h/γ) is h itself long before), got {:e}", config.gamma)));
         }
         positive("alpha", config.alpha)?;
         positive("safety_distance", config.safety_distance)?;
@@ -465,7 +473,7 @@ impl Shield {
     }
 
     /// [`Shield::filter_with`] for a scan in the world frame: points `p_i^W`, the robot at
-    /// `position` (its first `stride` entries). The points are taken to the body frame,
+    /// `position` (three finite values; a planar scan ignores its z). The points are taken to the body frame,
     /// `Rᵀ(p_i − p_r)`, so only relative positions matter (an odometry jump that moves robot
     /// and points together changes nothing).
     pub fn filter_world(

@@ -109,6 +109,12 @@ impl Scenario {
                 return Err(Error::invalid("walls", format!("end points must be within {COORDINATE_LIMIT} m of the origin, got {s:?}")));
             }
         }
+        for p in &self.map.polygons {
+            p.validate("polygons")?;
+            if p.vertices.iter().any(|&v| far(v)) {
+                return Err(Error::invalid("polygons", format!("vertices must be within {COORDINATE_LIMIT} m of the origin, got {:?}", p.vertices)));
+            }
+        }
         let pose = |p: &Pose2, what: &'static str| {
             p.validate(what)?;
             if far([p.x, p.y]) || p.yaw.abs() > YAW_LIMIT {
