@@ -322,6 +322,27 @@ fn public_qp_functions_name_bad_arguments() {
     assert!((u[0] - 0.5).abs() < 1e-6 && u[1].abs() < 1e-6, "{u:?}");
 }
 
+/// `evaluate_composite` checks its parameters as the shield does (κ = 0 gave −inf, a NaN crop
+/// dropped every point).
+#[test]
+fn composite_parameters_are_checked() {
+    use shieldnav_core::shield::{evaluate_composite, CompositeParams, Envelope};
+    let ok = CompositeParams { envelope: Envelope::new(&[0.9, 0.45]).unwrap(), gamma: 0.9, kappa: 8.0, crop_radius: Some(3.5), height_band: None, omega: [0.0; 3] };
+    let pts = [1.0f64, 0.2];
+    assert!(evaluate_composite(&pts, 2, &ok, SimdLevel::Portable).is_ok());
+    for (bad, name) in [
+        (CompositeParams { kappa: 0.0, ..ok.clone() }, "kappa"),
+        (CompositeParams { kappa: f64::NAN, ..ok.clone() }, "kappa"),
+        (CompositeParams { gamma: 0.0, ..ok.clone() }, "gamma"),
+        (CompositeParams { omega: [0.0, 0.0, f64::NAN], ..ok.clone() }, "omega"),
+        (CompositeParams { crop_radius: Some(f64::NAN), ..ok.clone() }, "crop_radius"),
+        (CompositeParams { height_band: Some((f64::NAN, 1.0)), ..ok.clone() }, "height_band"),
+    ] {
+        let e = evaluate_composite(&pts, 2, &bad, SimdLevel::Portable).unwrap_err().to_string();
+        assert!(e.contains(&format!("`{name}`")), "{e}");
+    }
+}
+
 #[test]
 fn empty_scan_is_valid_and_leaves_the_command() {
     for m in [ShieldMethod::Composite, ShieldMethod::Distance, ShieldMethod::HardMin, ShieldMethod::Unfiltered] {

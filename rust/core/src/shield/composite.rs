@@ -61,6 +61,22 @@ pub struct CompositeParams {
     pub omega: Vec3,
 }
 
+impl CompositeParams {
+    /// Checks every field as [`super::Shield::new`] does; the error names the field.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.gamma > 0.0 && self.gamma <= super::MAX_GAMMA) {
+            return Err(Error::invalid("gamma", format!("must be in (0, {:e}], got {}", super::MAX_GAMMA, self.gamma)));
+        }
+        if !(super::MIN_KAPPA..=super::MAX_KAPPA).contains(&self.kappa) {
+            return Err(Error::invalid("kappa", format!("must be from {:e} to {:e}, got {}", super::MIN_KAPPA, super::MAX_KAPPA, self.kappa)));
+        }
+        if !self.omega.iter().all(|v| v.is_finite()) {
+            return Err(Error::invalid("omega", format!("must be finite, got {:?}", self.omega)));
+        }
+        super::ScanFilter { crop_radius: self.crop_radius, height_band: self.height_band, voxel_size: None, angular_bins: None }.validate()
+    }
+}
+
 /// A planar rigid motion of the points, applied before use: the points were measured in an
 /// earlier body frame whose pose in the current one is `(tx, ty, yaw)`. Each point becomes
 /// `x' = tx + (cos·x − sin·y)`, `y' = ty + (sin·x + cos·y)`, `z' = z`, computed in the points'
@@ -351,6 +367,7 @@ pub fn evaluate_composite_moved<T: Lane>(pts: &[T], stride: usize, motion: Optio
     if !pts.len().is_multiple_of(stride) {
         return Err(Error::invalid("points", format!("{} values do not make rows of {stride}", pts.len())));
     }
+    p.validate()?;
     if dim > stride {
         return Err(Error::DimensionMismatch { name: "points", expected: dim, got: stride });
     }
