@@ -331,12 +331,12 @@ fn composite_parameters_are_checked() {
     let pts = [1.0f64, 0.2];
     assert!(evaluate_composite(&pts, 2, &ok, SimdLevel::Portable).is_ok());
     for (bad, name) in [
-        (CompositeParams { kappa: 0.0, ..ok.clone() }, "kappa"),
-        (CompositeParams { kappa: f64::NAN, ..ok.clone() }, "kappa"),
-        (CompositeParams { gamma: 0.0, ..ok.clone() }, "gamma"),
-        (CompositeParams { omega: [0.0, 0.0, f64::NAN], ..ok.clone() }, "omega"),
-        (CompositeParams { crop_radius: Some(f64::NAN), ..ok.clone() }, "crop_radius"),
-        (CompositeParams { height_band: Some((f64::NAN, 1.0)), ..ok.clone() }, "height_band"),
+        (CompositeParams { kappa: 0.0, ..ok }, "kappa"),
+        (CompositeParams { kappa: f64::NAN, ..ok }, "kappa"),
+        (CompositeParams { gamma: 0.0, ..ok }, "gamma"),
+        (CompositeParams { omega: [0.0, 0.0, f64::NAN], ..ok }, "omega"),
+        (CompositeParams { crop_radius: Some(f64::NAN), ..ok }, "crop_radius"),
+        (CompositeParams { height_band: Some((f64::NAN, 1.0)), ..ok }, "height_band"),
     ] {
         let e = evaluate_composite(&pts, 2, &bad, SimdLevel::Portable).unwrap_err().to_string();
         assert!(e.contains(&format!("`{name}`")), "{e}");
