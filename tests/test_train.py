@@ -59,7 +59,9 @@ def test_sb3_adapter_answers_as_dummy_vec_env_does():
     assert [s.shape for s in v.get_attr("observation_space")] == [(73,), (73,)]
     assert [s.shape for s in v.get_attr("action_space")] == [(3,), (3,)]
     assert v.get_attr("spec")[0].id == "shieldnav/ConstrictedPassage-v0"
+    v.seed(4)
     v.reset()
+    assert v.reset_infos[1]["seed"] == gym.make("shieldnav/ConstrictedPassage-v0").reset(seed=5)[1]["seed"]
     v.step_async(np.zeros((2, 3), np.float32))
     infos = v.step_wait()[3]
     single = gym.make("shieldnav/ConstrictedPassage-v0")

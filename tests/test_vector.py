@@ -106,6 +106,17 @@ def test_gymnasium_vector_conventions():
         v.step(np.zeros((3, 3), np.float32))
 
 
+def test_reset_info_is_the_single_envs():
+    v = gym.make_vec(ENV, num_envs=2, vectorization_mode="vector_entry_point")
+    _, info = v.reset(seed=3)
+    for i in range(2):
+        single = gym.make(ENV)
+        _, one = single.reset(seed=3 + i)
+        assert info["seed"][i] == one["seed"] and info["_seed"][i]
+        assert info["coverage"][i] == one["coverage"] and info["time"][i] == one["time"]
+    v.close()
+
+
 def test_same_step_mode_returns_the_final_observation():
     v = CorridorInspectionVectorEnv(2, preset="constricted_passage", autoreset_mode="same_step", max_episode_steps=5)
     assert v.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP

@@ -50,7 +50,8 @@ class ShieldnavVecEnv(VecEnv):
             options, self._options = self._options, [{} for _ in range(self.num_envs)]
             raise InvalidArgumentError(f"invalid `options`: ShieldnavVecEnv's reset takes none, got {options}")
         seeds = None if self._seeds[0] is None else [int(s) for s in self._seeds]
-        obs, _ = self.vec.reset(seed=seeds)
+        obs, info = self.vec.reset(seed=seeds)
+        self.reset_infos = [{k: info[k][i].item() for k in ("seed", "coverage", "time")} for i in range(self.num_envs)]
         self._reset_seeds()
         return obs
 

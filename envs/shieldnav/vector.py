@@ -63,7 +63,9 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
     ``reset(seed=...)``: an int (sub-environment ``i`` gets ``seed + i``), a list (``None``
     entries draw a seed from the vector's generator), or ``None`` (every sub-environment gets a
     seed from that generator: deterministic after a seeded reset, but not what ``N`` single
-    environments continuing their own generators would draw).
+    environments continuing their own generators would draw). Its info is the single
+    environment's reset info (``seed``, the episode's own; ``coverage``; ``time``) per
+    sub-environment.
     """
 
     def __init__(
@@ -129,9 +131,14 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
             if len(seed) != self.num_envs:
                 raise InvalidArgumentError(f"invalid `seed`: expected {self.num_envs} seeds, got {len(seed)}")
             seeds = [int(s) if s is not None else int(self.np_random.integers(0, 2**31)) for s in seed]
-        obs = self._batch.reset(self._seeds.reseed(seeds))
+        first = self._seeds.reseed(seeds)
+        obs = self._batch.reset(first)
         self._next = self._seeds.draw(np.ones(self.num_envs, bool))
-        return obs, {}
+        # the single environment's reset info, one array per key with its mask
+        every = np.ones(self.num_envs, bool)
+        zeros = np.zeros(self.num_envs)
+        info = {"seed": first.astype(np.uint64), "coverage": zeros, "time": zeros.copy()}
+        return obs, {**info, **{"_" + k: every for k in info}}
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         # every sub-environment that may reset in this call gets its next seed; only those
