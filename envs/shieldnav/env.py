@@ -21,6 +21,12 @@ _OBSERVATIONS = ("flat", "dict")
 _POSE_BOUND = 1.0e9
 
 
+def site_args(preset: str | None, procedural: bool, map_path: Any, scenario_path: Any) -> dict[str, Any]:
+    """The site keywords of the Rust ``Episode`` and ``Batch`` (a path may start with ``~``)."""
+    path = lambda p: None if p is None else os.path.expanduser(p)  # noqa: E731
+    return dict(preset=preset, procedural=procedural, ros_map=path(map_path), scenario=path(scenario_path))
+
+
 class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
     """Inspect the walls of a building with a legged robot whose commands pass a safety shield.
 
@@ -119,9 +125,7 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
             raise InvalidArgumentError(
                 f"invalid `render_mode`: expected one of {self.metadata['render_modes']} or None, got {render_mode!r}"
             )
-        # (a path may start with ~, as in a shell)
-        map_path, scenario_path = (None if p is None else os.path.expanduser(p) for p in (map_path, scenario_path))
-        self._site = dict(preset=preset, procedural=procedural, ros_map=map_path, scenario=scenario_path)
+        self._site = site_args(preset, procedural, map_path, scenario_path)
         self._episode = Episode(**self._site, seed=0, **config)
         self.config = {**ENV_DEFAULTS, **config}
         self.observation_mode = observation

@@ -18,7 +18,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from shieldnav._core import Batch
-from shieldnav.env import CorridorInspectionEnv
+from shieldnav.env import CorridorInspectionEnv, site_args
 from shieldnav.exceptions import InvalidArgumentError
 
 _MODES = {"next_step": AutoresetMode.NEXT_STEP, "same_step": AutoresetMode.SAME_STEP}
@@ -98,8 +98,7 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         threads = threads if threads is not None else len(os.sched_getaffinity(0))
         limits = [v for v in (max_episode_steps, time_limit) if v is not None]
         limit = min(limits) if limits else None
-        map_path, scenario_path = (None if p is None else os.path.expanduser(p) for p in (map_path, scenario_path))
-        site = dict(preset=preset, procedural=procedural, ros_map=map_path, scenario=scenario_path)
+        site = site_args(preset, procedural, map_path, scenario_path)
         self._seeds = EpisodeSeeds(num_envs)
         first = self._seeds.reseed(list(range(num_envs)))
         self._next = self._seeds.draw(np.ones(num_envs, bool))

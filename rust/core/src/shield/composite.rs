@@ -360,6 +360,13 @@ pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams
 /// [`evaluate_composite`] on points that are first moved by `motion` (see [`Motion`]), in
 /// the same pass: crop, height band and barrier see the moved points.
 pub fn evaluate_composite_moved<T: Lane>(pts: &[T], stride: usize, motion: Option<Motion>, p: &CompositeParams, level: SimdLevel) -> Result<CompositeBarrier> {
+    p.validate()?;
+    composite_of_valid(pts, stride, motion, p, level)
+}
+
+/// [`evaluate_composite_moved`] with parameters known valid (the [`super::Shield`]'s, checked
+/// when it was built): the points are still checked.
+pub(crate) fn composite_of_valid<T: Lane>(pts: &[T], stride: usize, motion: Option<Motion>, p: &CompositeParams, level: SimdLevel) -> Result<CompositeBarrier> {
     let dim = p.envelope.dim();
     if stride != 2 && stride != 3 {
         return Err(Error::invalid("points", format!("points need 2 or 3 coordinates, got {stride}")));
@@ -367,7 +374,6 @@ pub fn evaluate_composite_moved<T: Lane>(pts: &[T], stride: usize, motion: Optio
     if !pts.len().is_multiple_of(stride) {
         return Err(Error::invalid("points", format!("{} values do not make rows of {stride}", pts.len())));
     }
-    p.validate()?;
     if dim > stride {
         return Err(Error::DimensionMismatch { name: "points", expected: dim, got: stride });
     }

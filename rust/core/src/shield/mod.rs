@@ -29,6 +29,7 @@ mod scan;
 use std::time::Instant;
 
 pub use composite::{evaluate_composite, evaluate_composite_moved, CompositeBarrier, CompositeParams, Motion, SimdLevel};
+use composite::composite_of_valid;
 pub use conic::{solve_rows, LinearConstraints};
 pub use ellipsoid::{Envelope, MAX_SEMI_AXIS, MIN_SEMI_AXIS};
 pub use lane::Lane;
@@ -519,8 +520,8 @@ impl Shield {
         };
         if !self.config.scan.downsamples() {
             return match scan.points {
-                Points::F32(p) => evaluate_composite_moved(p, scan.stride, scan.motion, &params, self.level),
-                Points::F64(p) => evaluate_composite_moved(p, scan.stride, scan.motion, &params, self.level),
+                Points::F32(p) => composite_of_valid(p, scan.stride, scan.motion, &params, self.level),
+                Points::F64(p) => composite_of_valid(p, scan.stride, scan.motion, &params, self.level),
             };
         }
         if scan.motion.is_some() {
@@ -534,11 +535,11 @@ impl Shield {
         match scan.points {
             Points::F32(p) => {
                 select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf32);
-                evaluate_composite(&self.buf32, dim, &params, self.level)
+                composite_of_valid(&self.buf32, dim, None, &params, self.level)
             }
             Points::F64(p) => {
                 select_points(p, scan.stride, &self.envelope, &self.config.scan, &mut self.scratch, &mut self.buf64);
-                evaluate_composite(&self.buf64, dim, &params, self.level)
+                composite_of_valid(&self.buf64, dim, None, &params, self.level)
             }
         }
     }
