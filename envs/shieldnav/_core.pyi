@@ -70,7 +70,7 @@ class Shield:
         u_nom: _Vec,
         yaw: float | None = None,
         omega: float | _Vec | None = None,
-        rotation: npt.NDArray[np.float64] | None = None,
+        rotation: npt.ArrayLike | None = None,
         extra_A: npt.NDArray[np.float64] | None = None,
         extra_b: _Vec | None = None,
     ) -> ShieldOutcome: ...
@@ -81,7 +81,7 @@ class Shield:
         position: _Vec,
         yaw: float | None = None,
         omega: float | _Vec | None = None,
-        rotation: npt.NDArray[np.float64] | None = None,
+        rotation: npt.ArrayLike | None = None,
         extra_A: npt.NDArray[np.float64] | None = None,
         extra_b: _Vec | None = None,
     ) -> ShieldOutcome: ...

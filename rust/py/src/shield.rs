@@ -148,7 +148,9 @@ impl PyShield {
         self.run(py, points, u_nom, None, yaw, omega, rotation, extra_A, extra_b)
     }
 
-    /// Like `filter`, for world-frame points and the robot at `position`.
+    /// Like `filter`, for world-frame points and the robot at `position`: (x, y) or
+    /// (x, y, z) for a planar shield (the height band of (N, 3) points applies to their
+    /// height above z, 0 if not given), (x, y, z) for a 3D one.
     #[pyo3(signature = (points, u_nom, position, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn filter_world(
@@ -221,12 +223,14 @@ impl PyShield {
         let extra = extra_rows(dim, extra_a, extra_b)?;
         let position = match position {
             Some(p) => {
+                // (a planar shield's position may carry the robot's height: the height band
+                // of (N, 3) world points is taken relative to it)
                 let v = vector("position", p)?;
-                if v.len() != dim {
-                    return Err(invalid("position", format!("expected {dim} values, got {}", v.len())));
+                if !(v.len() == dim || dim == 2 && v.len() == 3) {
+                    return Err(invalid("position", format!("expected {}, got {} values", if dim == 2 { "2 values (x, y) or 3 (x, y, z)" } else { "3 values" }, v.len())));
                 }
                 let mut a = [0.0; 3];
-                a[..dim].copy_from_slice(&v);
+                a[..v.len()].copy_from_slice(&v);
                 Some(a)
             }
             None => None,
@@ -256,18 +260,7 @@ fn body_state(dim: usize, yaw: Option<f64>, omega: Option<&Bound<'_, PyAny>>, ro
     let r: Mat3 = match (rotation, yaw) {
         (Some(_), Some(_)) => return Err(invalid("rotation", "give either `rotation` or `yaw`, not both")),
         (Some(r), None) => {
-            let m = r.extract::<PyReadonlyArray2<f64>>().map_err(|_| invalid("rotation", "expected a 3x3 float array"))?;
-            let a = m.as_array();
-            if a.shape() != [3, 3] {
-                return Err(invalid("rotation", format!("expected shape (3, 3), got {:?}", a.shape())));
-            }
-            let mut out = [[0.0; 3]; 3];
-            for i in 0..3 {
-                for j in 0..3 {
-                    out[i][j] = a[[i, j]];
-                }
-            }
-            out
+            rotation_arg(r)?
         }
         (None, y) => rot_z(y.unwrap_or(0.0)),
     };
@@ -282,6 +275,22 @@ fn body_state(dim: usize, yaw: Option<f64>, omega: Option<&Bound<'_, PyAny>>, ro
         }
     };
     BodyState::spatial(r, w).map_err(to_py)
+}
+
+/// A 3 × 3 rotation from a float64 or float32 array or nested sequences of numbers.
+fn rotation_arg(r: &Bound<'_, PyAny>) -> PyResult<Mat3> {
+    let rows: Vec<Vec<f64>> = if let Ok(m) = r.extract::<PyReadonlyArray2<f64>>() {
+        m.as_array().rows().into_iter().map(|row| row.to_vec()).collect()
+    } else if let Ok(m) = r.extract::<PyReadonlyArray2<f32>>() {
+        m.as_array().rows().into_iter().map(|row| row.iter().map(|&v| v as f64).collect()).collect()
+    } else {
+        r.extract().map_err(|_| invalid("rotation", format!("expected a 3x3 array of numbers (float64 or float32), got {}", r.get_type().name().map(|n| n.to_string()).unwrap_or_default())))?
+    };
+    let shape = (rows.len(), rows.first().map_or(0, Vec::len));
+    if shape != (3, 3) || rows.iter().any(|row| row.len() != 3) {
+        return Err(invalid("rotation", format!("expected shape (3, 3), got {} rows of {:?} values", rows.len(), rows.iter().map(Vec::len).collect::<Vec<_>>())));
+    }
+    Ok([[rows[0][0], rows[0][1], rows[0][2]], [rows[1][0], rows[1][1], rows[1][2]], [rows[2][0], rows[2][1], rows[2][2]]])
 }
 
 fn extra_rows(dim: usize, a: Option<&Bound<'_, PyAny>>, b: Option<&Bound<'_, PyAny>>) -> PyResult<Option<LinearConstraints>> {

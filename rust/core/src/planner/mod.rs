@@ -62,7 +62,8 @@ pub struct ViewPlanner {
     world: Vec<Vec3>,
 }
 
-/// Most steps of a predicted path ([`ViewPlannerConfig::horizon`]; the paper's is 5).
+/// Most steps of a predicted path ([`ViewPlannerConfig::horizon`]; the paper leaves its `N`
+/// open, our default is 5).
 pub const MAX_HORIZON: usize = 10_000;
 
 /// Largest coordinate (m) of points and positions the planner takes: their distances are

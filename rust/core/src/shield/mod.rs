@@ -156,7 +156,7 @@ impl BodyState {
         finite("rotation", rotation.as_flattened())?;
         finite("omega", &omega)?;
         let err = orthonormality_error(&rotation);
-        if err > 1e-6 || det(&rotation) < 0.0 {
+        if err > ROTATION_TOLERANCE || det(&rotation) < 0.0 {
             return Err(Error::invalid("rotation", format!("not a proper rotation matrix (|RᵀR − I| = {err:.2e}, det = {:.3})", det(&rotation))));
         }
         Ok(Self { rotation, omega, planar: false })
@@ -287,6 +287,11 @@ pub struct Shield {
     rows: LinearConstraints,
 }
 
+/// How far from orthonormal (`max |RᵀR − I|`) a rotation may be: a rotation written to six
+/// decimals is off by up to about 3e-6 (1e-6 refused a fifth of them); an error `ε` in `R`
+/// moves each `h_i` by about `ε` relative.
+pub const ROTATION_TOLERANCE: f64 = 1e-5;
+
 /// Largest soft-min sharpness `κ`: beyond it the weights' products overflow (κ = 1e100 gave a
 /// NaN command), and the soft-min equals the hard min to every digit long before.
 pub const MAX_KAPPA: f64 = 1e6;
@@ -295,19 +300,27 @@ pub const MAX_KAPPA: f64 = 1e6;
 pub const MIN_KAPPA: f64 = 1e-3;
 /// Largest saturation `γ` (m² of `h`): beyond, `γ tanh(h/γ)` is `h` to every digit.
 pub const MAX_GAMMA: f64 = 1e6;
+/// Least saturation `γ`: below about 1.6e-308 the kernel's `2 log₂e / γ` is infinite (a point
+/// on the ellipse gave a NaN command); long before, `tanh(h/γ)` is the sign of `h`.
+pub const MIN_GAMMA: f64 = 1e-6;
+
+/// `γ` and `κ` within their bounds ([`MIN_GAMMA`] to [`MAX_GAMMA`], [`MIN_KAPPA`] to
+/// [`MAX_KAPPA`]): the one check of [`Shield::new`] and [`composite::CompositeParams::validate`].
+pub(crate) fn check_gamma_kappa(gamma: f64, kappa: f64) -> Result<()> {
+    if !(MIN_GAMMA..=MAX_GAMMA).contains(&gamma) {
+        return Err(Error::invalid("gamma", format!("must be from {MIN_GAMMA:e} to {MAX_GAMMA:e} (below, tanh(h/γ) is the sign of h; above, γ tanh(h/γ) is h itself), got {gamma:e}")));
+    }
+    if !(MIN_KAPPA..=MAX_KAPPA).contains(&kappa) {
+        return Err(Error::invalid("kappa", format!("must be from {MIN_KAPPA:e} to {MAX_KAPPA:e} (beyond, the soft-min is the hard min to every digit), got {kappa:e}")));
+    }
+    Ok(())
+}
 
 impl Shield {
     /// Validates `config`; every error names the field at fault.
     pub fn new(config: ShieldConfig) -> Result<Self> {
         let envelope = Envelope::new(&config.semi_axes)?;
-        positive("gamma", config.gamma)?;
-        positive("kappa", config.kappa)?;
-        if !(MIN_KAPPA..=MAX_KAPPA).contains(&config.kappa) {
-            return Err(Error::invalid("kappa", format!("must be from {MIN_KAPPA:e} to {MAX_KAPPA:e} (beyond, the soft-min is the hard min to every digit), got {:e}", config.kappa)));
-        }
-        if config.gamma > MAX_GAMMA {
-            return Err(Error::invalid("gamma", format!("must be at most {MAX_GAMMA:e} (the saturation γ tanh(h/γ) is h itself long before), got {:e}", config.gamma)));
-        }
+        check_gamma_kappa(config.gamma, config.kappa)?;
         positive("alpha", config.alpha)?;
         positive("safety_distance", config.safety_distance)?;
         if !(config.grad_eps.is_finite() && config.grad_eps >= 0.0) {
@@ -474,7 +487,9 @@ impl Shield {
     }
 
     /// [`Shield::filter_with`] for a scan in the world frame: points `p_i^W`, the robot at
-    /// `position` (three finite values; a planar scan ignores its z). The points are taken to the body frame,
+    /// `position` (three finite values; a scan of 2-D points ignores its z, and the heights of
+    /// 3-D points are taken relative to it, so a planar shield's height band applies to
+    /// `z − position[2]`). The points are taken to the body frame,
     /// `Rᵀ(p_i − p_r)`, so only relative positions matter (an odometry jump that moves robot
     /// and points together changes nothing).
     pub fn filter_world(

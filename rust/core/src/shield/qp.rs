@@ -105,7 +105,13 @@ pub(crate) fn project_checked(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[
         for j in 0..d {
             u[j] = u_nom[j] + mu * g[j];
         }
-        return QpSolution { u, active: true, feasible: true };
+        // the optimum lies on the row; a huge `u_nom` cancels in `u_nom + μ g` (1e17 m/s left
+        // it short by 1.16): one step more from the command found, small then, reaches it
+        let short = b - dot_d(g, &u[..d]);
+        for j in 0..d {
+            u[j] += short / g2 * g[j];
+        }
+        return QpSolution { u, active: true, feasible: meets_row(g, &u[..d], b) };
     };
     let reach: f64 = (0..d).map(|j| g[j].abs() * m[j]).sum();
     if reach < b {
@@ -149,8 +155,19 @@ pub(crate) fn project_checked(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[
     for j in 0..d {
         u[j] = clamp(j, u_nom[j] + mu * g[j]);
     }
-    QpSolution { u, active: true, feasible: true }
+    QpSolution { u, active: true, feasible: meets_row(g, &u[..d], b) }
 }
+
+/// Whether `u` meets the row `gᵀu ≥ b` up to rounding ([`ROW_TOLERANCE`] of `max(|b|, 1)`):
+/// a solution is called feasible only if it does (rounding in a huge `u_nom` can leave it
+/// short).
+fn meets_row(g: &[f64], u: &[f64], b: f64) -> bool {
+    dot_d(g, u) >= b - ROW_TOLERANCE * b.abs().max(1.0)
+}
+
+/// How far (relative) a solution may fall short of its row and still be called feasible:
+/// far above the rounding of a command of ordinary size (about 1e-16), far below any margin.
+const ROW_TOLERANCE: f64 = 1e-9;
 
 #[cfg(test)]
 mod tests {
@@ -162,9 +179,35 @@ mod tests {
         let s = project_halfspace_box(&[1.5, -1.0], &[1.0, 1.0], 1.5, Some(&[1.0, 1.0]), 1e-9).unwrap();
         assert!(s.feasible && s.active);
         assert!((s.u[0] - 1.0).abs() < 1e-12 && (s.u[1] - 0.5).abs() < 1e-12, "{:?}", s.u);
-        // naive: project (μ = 1) → (2.5, 0), then clamp → (1, 0), which violates the row
-        let naive = [1.0f64, 0.0];
-        assert!(naive[0] + naive[1] < 1.5);
+        // naive: project onto the row alone, then clamp: (2, −0.5) → (1, −0.5), which violates it
+        let free = project_halfspace_box(&[1.5, -1.0], &[1.0, 1.0], 1.5, None, 1e-9).unwrap();
+        let naive = [free.u[0].clamp(-1.0, 1.0), free.u[1].clamp(-1.0, 1.0)];
+        assert_eq!(naive, [1.0, -0.5]);
+        assert!(naive[0] + naive[1] < 1.5 && s.u[0] + s.u[1] >= 1.5 - 1e-12);
+    }
+
+    /// A huge `u_nom` without a box: the command meets the row (the exact `u_x = b / g_x`),
+    /// not the cancelled `u_nom + μ g` that fell short of it while called feasible.
+    #[test]
+    fn huge_nominal_command_still_meets_the_row() {
+        // (a point 0.5 m ahead: the row pushes back along −x)
+        let (g, b) = ([-0.7, 0.0], -1.131);
+        for big in [1e15, 1e17, -1e17] {
+            let s = project_halfspace_box(&[big, 3.0], &g, b, None, 1e-9).unwrap();
+            let row = g[0] * s.u[0] + g[1] * s.u[1];
+            if big > 0.0 {
+                assert!(s.active && s.feasible && (s.u[0] - b / g[0]).abs() <= 1e-12 * (b / g[0]).abs() && s.u[1] == 3.0, "{big}: {:?}", s.u);
+            } else {
+                assert!(!s.active && s.feasible && s.u[0] == big);
+            }
+            assert!(row >= b - 1e-12, "{big}: {row} < {b}");
+        }
+        // far beyond, the rounding of 1e300 is left: the command is called feasible only if
+        // it meets the row
+        for big in [1e300, 3e299, 1e200] {
+            let s = project_halfspace_box(&[big, 0.0], &g, b, None, 1e-9).unwrap();
+            assert!(!s.feasible || g[0] * s.u[0] >= b - 1e-9 * b.abs(), "{big}: {:?} called feasible", s.u);
+        }
     }
 
     #[test]

@@ -14,7 +14,9 @@ use super::ellipsoid::Envelope;
 use super::lane::Lane;
 use crate::error::{Error, Result};
 
-/// How the scan is thinned before the filter. The default is the paper's: crop at 3.5 m.
+/// How the scan is thinned before the filter. The default crops at 3.5 m, as the paper does,
+/// and keeps a planar shield's `(N, 3)` points from 0.4 m below to 1.5 m above the body origin
+/// (a band of ours: the paper's shield is 3D).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScanFilter {
     /// Drop points farther than this (m) from the robot in the shield's space; `None` keeps all.
