@@ -92,3 +92,34 @@ def test_controller_saturates_for_any_finite_gain_and_names_its_inputs():
                        (((0.0, 0.0), np.nan, (0.0, 0.0), 0.0), "goal_yaw"), (((0.0, 0.0), 0.0, (0.0, 0.0), np.inf), "yaw")]:
         with pytest.raises(ValueError, match=f"`{name}`"):
             c.command(*args)
+
+
+def test_planar_plan_with_a_turned_robot_and_3d_points():
+    """The body points turned into the world by the estimated yaw (R, not its transpose); a
+    point straight below the robot gives no direction in the plane and is not the nearest."""
+    yaw = 0.8
+    body = np.c_[wall_right(), np.zeros(len(wall_right()))]
+    body = np.vstack([[0.0, 0.0, -0.4], body])
+    p_d, psi = ViewPlanner().plan(np.ascontiguousarray(body), (1.0, 2.0), yaw)
+    d_hov = 2 * np.tan(np.radians(69.4) / 2) * 2.0 * 0.5
+    c, s = np.cos(yaw), np.sin(yaw)
+    np.testing.assert_allclose(p_d, [1.0 + c * d_hov + s * 0.5, 2.0 + s * d_hov - c * 0.5], atol=1e-12)
+    assert psi == pytest.approx(yaw - np.pi / 2)
+
+
+def test_gamma_v_acts_in_3d_planning_and_is_refused_in_the_plane():
+    with pytest.raises(ValueError, match="gamma_v.*planar"):
+        ViewPlanner(gamma_v=0.5)
+    # a point 1 m ahead and 1 m up: nu_x = (1, 0, 1)/sqrt2, nu_z = (-1, 0, 1)/sqrt2
+    pts = np.array([[1.0, 0.0, 1.0]])
+    outs = {}
+    for g, fov in ((1.0, 45.0), (0.0, 45.0), (0.0, 90.0)):
+        p_d, psi = ViewPlanner(planar=False, gamma_v=g, fov_v_deg=fov).plan(pts, (0.0, 0.0, 0.0), 0.0)
+        assert p_d.shape == (3,) and psi == pytest.approx(0.0)
+        d_vov = 2 * np.tan(np.radians(fov) / 2) * np.sqrt(2) * (1 - g)
+        d_insp = np.sqrt(2) - 1.5
+        np.testing.assert_allclose(p_d[[0, 2]], np.array([d_insp - d_vov, d_insp + d_vov]) / np.sqrt(2), atol=1e-12)
+        outs[(g, fov)] = p_d
+    assert not np.allclose(outs[(0.0, 45.0)], outs[(0.0, 90.0)])
+    with pytest.raises(ValueError, match="position.*3 numbers"):
+        ViewPlanner(planar=False).plan(pts, (0.0, 0.0), 0.0)

@@ -27,16 +27,21 @@ fn pair(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<[f64; 2]> {
 
 type Pose<'py> = (Bound<'py, PyArray1<f64>>, f64);
 
-fn pose_out<'py>(py: Python<'py>, v: ViewPose) -> Pose<'py> {
-    (PyArray1::from_slice(py, &v.position[..2]), v.yaw)
+fn pose_out<'py>(py: Python<'py>, v: ViewPose, planar: bool) -> Pose<'py> {
+    (PyArray1::from_slice(py, &v.position[..if planar { 2 } else { 3 }]), v.yaw)
 }
 
 /// ViewPlanner(d_view=1.5, gamma_h=0.5, fov_h_deg=69.4, fov_v_deg=45.0, gamma_v=1.0,
-///             horizon=5, reach_threshold=0.3)
+///             horizon=5, reach_threshold=0.3, planar=True)
 ///
 /// The reactive inspection planner of the paper (Sec. IV-A, Eq. flip), on the estimated pose.
-/// Methods take body-frame points (float64, (N, 2) or (N, 3)), the estimated position (x, y)
-/// and yaw, and return (p_d, psi) with p_d a length-2 array, or None without points.
+/// Methods take body-frame points (float64, (N, 2) or (N, 3)), the estimated position and
+/// yaw, and return (p_d, psi), or None without points.
+///
+/// planar=True (a ground robot, as the paper's quadruped experiments): the nearest point in
+/// the horizontal plane, position (x, y), p_d a length-2 array; gamma_v must be 1 (the
+/// vertical term would move only a height). planar=False: Eq. (flip) in space, the nearest
+/// point in 3D, position (x, y, z), p_d a length-3 array.
 #[pyclass(name = "ViewPlanner", module = "shieldnav._core")]
 pub struct PyViewPlanner {
     inner: ViewPlanner,
@@ -57,8 +62,16 @@ impl PyViewPlanner {
             return Err(invalid("points", "must be C-contiguous (np.ascontiguousarray)"));
         }
         let slice = a.as_slice().map_err(|_| invalid("points", "must be C-contiguous (np.ascontiguousarray)"))?;
-        let [x, y] = pair("position", position)?;
-        f(&mut self.inner, slice, stride, &[x, y, 0.0], yaw).map_err(to_py)
+        let at = if self.inner.config().planar {
+            let [x, y] = pair("position", position)?;
+            [x, y, 0.0]
+        } else {
+            match crate::shield::vector("position", position)?.as_slice() {
+                &[x, y, z] => [x, y, z],
+                v => return Err(invalid("position", format!("expected 3 numbers (x, y, z) for a planner in space (planar=False), got {}", v.len()))),
+            }
+        };
+        f(&mut self.inner, slice, stride, &at, yaw).map_err(to_py)
     }
 }
 
@@ -73,30 +86,35 @@ impl PyViewPlanner {
         gamma_v = ViewPlannerConfig::default().gamma_v,
         horizon = ViewPlannerConfig::default().horizon,
         reach_threshold = ViewPlannerConfig::default().reach_threshold,
+        planar = ViewPlannerConfig::default().planar,
     ))]
-    fn new(d_view: f64, gamma_h: f64, fov_h_deg: f64, fov_v_deg: f64, gamma_v: f64, horizon: usize, reach_threshold: f64) -> PyResult<Self> {
+    #[allow(clippy::too_many_arguments)]
+    fn new(d_view: f64, gamma_h: f64, fov_h_deg: f64, fov_v_deg: f64, gamma_v: f64, horizon: usize, reach_threshold: f64, planar: bool) -> PyResult<Self> {
         for (name, v) in [("fov_h_deg", fov_h_deg), ("fov_v_deg", fov_v_deg)] {
             if !(v > 0.0 && v < 180.0) {
                 return Err(invalid(name, format!("must be in (0, 180) degrees, got {v}")));
             }
         }
-        let config = ViewPlannerConfig { d_view, gamma_h, gamma_v, fov_h: fov_h_deg.to_radians(), fov_v: fov_v_deg.to_radians(), horizon, reach_threshold };
+        let config = ViewPlannerConfig { d_view, gamma_h, gamma_v, fov_h: fov_h_deg.to_radians(), fov_v: fov_v_deg.to_radians(), horizon, reach_threshold, planar };
         Ok(Self { inner: ViewPlanner::new(config).map_err(to_py)? })
     }
 
     /// One step of Eq. (flip) from the estimated pose.
     fn plan<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: &Bound<'py, PyAny>, yaw: f64) -> PyResult<Option<Pose<'py>>> {
-        Ok(self.call(points, position, yaw, |p, s, n, x, y| p.plan(s, n, x, y))?.map(|v| pose_out(py, v)))
+        let planar = self.inner.config().planar;
+        Ok(self.call(points, position, yaw, |p, s, n, x, y| p.plan(s, n, x, y))?.map(|v| pose_out(py, v, planar)))
     }
 
     /// The held reference, replanned once the estimate is within reach_threshold of it.
     fn update<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: &Bound<'py, PyAny>, yaw: f64) -> PyResult<Option<Pose<'py>>> {
-        Ok(self.call(points, position, yaw, |p, s, n, x, y| p.update(s, n, x, y))?.map(|v| pose_out(py, v)))
+        let planar = self.inner.config().planar;
+        Ok(self.call(points, position, yaw, |p, s, n, x, y| p.update(s, n, x, y))?.map(|v| pose_out(py, v, planar)))
     }
 
     /// The predicted inspection path over the horizon: a list of (p_d, psi).
     fn predict_path<'py>(&mut self, py: Python<'py>, points: &Bound<'py, PyAny>, position: &Bound<'py, PyAny>, yaw: f64) -> PyResult<Vec<Pose<'py>>> {
-        Ok(self.call(points, position, yaw, |p, s, n, x, y| p.predict_path(s, n, x, y))?.into_iter().map(|v| pose_out(py, v)).collect())
+        let planar = self.inner.config().planar;
+        Ok(self.call(points, position, yaw, |p, s, n, x, y| p.predict_path(s, n, x, y))?.into_iter().map(|v| pose_out(py, v, planar)).collect())
     }
 
     /// Forgets the held reference.
