@@ -147,7 +147,7 @@ class World:
         kind: str = "office",
         ros_map: str | None = None,
         scenario: str | None = None,
-        seed: int = 0,
+        seed: int | None = None,
         dt: float = 0.02,
         channels: int = 1,
         columns: int = 1024,

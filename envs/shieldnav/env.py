@@ -22,9 +22,15 @@ _POSE_BOUND = 1.0e9
 
 
 def site_args(preset: str | None, procedural: bool, map_path: Any, scenario_path: Any) -> dict[str, Any]:
-    """The site keywords of the Rust ``Episode`` and ``Batch`` (a path may start with ``~``)."""
+    """The site keywords of the Rust ``Episode`` and ``Batch`` (a path may start with ``~``),
+    checked as the environments name them."""
+    if not isinstance(procedural, (bool, np.bool_)):
+        raise InvalidArgumentError(f"invalid `procedural`: expected True or False, got {procedural!r}")
+    given = [k for k, v in (("preset", preset), ("procedural=True", procedural or None), ("map_path", map_path), ("scenario_path", scenario_path)) if v is not None]
+    if len(given) != 1:
+        raise InvalidArgumentError(f"invalid site: give exactly one of preset, procedural=True, map_path, scenario_path (got {', '.join(given) or 'none'})")
     path = lambda p: None if p is None else os.path.expanduser(p)  # noqa: E731
-    return dict(preset=preset, procedural=procedural, ros_map=path(map_path), scenario=path(scenario_path))
+    return dict(preset=preset, procedural=bool(procedural), ros_map=path(map_path), scenario=path(scenario_path))
 
 
 class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):

@@ -198,3 +198,51 @@ fn small_worlds_scan_as_the_index_does() {
     }
     assert!(scans >= 200, "{scans} scans");
 }
+
+/// The paper's jump at 20 s comes at the step whose time is 20 s (with 0.02 s steps added up
+/// the time was 19.999… there and the jump came a step late), and a fault scheduled at or
+/// before the start applies from it (one at 0 s never fired).
+#[test]
+fn odometry_faults_fire_at_their_step_and_from_the_start() {
+    use shieldnav_core::sensors::{OdometryConfig, OdometryFault};
+    use shieldnav_core::world::{Pose2, Scenario, StaticMap};
+    let at = |faults: Vec<OdometryFault>| {
+        let mut s = Scenario::new("open", StaticMap::new(), Pose2::default());
+        s.odometry = OdometryConfig { faults, ..Default::default() };
+        World::new(s, WorldConfig { dt: 0.02, ..Default::default() }).unwrap()
+    };
+    let mut w = at(vec![OdometryFault::Jump { time: 20.0, dx: 100.0, dy: 0.0 }]);
+    for k in 1..=1000 {
+        let o = w.step([0.0, 0.0, 0.0]).unwrap();
+        let jumped = (o.estimated_pose.x - o.true_pose.x - 100.0).abs() < 1e-9;
+        assert_eq!(jumped, k == 1000, "step {k} at {}", o.time);
+    }
+    assert_eq!(w.time(), 20.0);
+    for time in [0.0, -3.0] {
+        let w = at(vec![OdometryFault::Jump { time, dx: 5.0, dy: 1.0 }, OdometryFault::YawJump { time, dyaw: 0.5 }]);
+        let e = w.estimated_pose();
+        assert!(e.x == 5.0 && e.y == 1.0 && e.yaw == 0.5, "{time}: {e:?}");
+    }
+}
+
+/// A start where the robot cannot stand is an error naming `start`: crossing a wall, or
+/// inside a polygon or an obstacle (whose walls it then does not touch: no contact was
+/// reported and the LIDAR saw through the box).
+#[test]
+fn impossible_starts_are_errors() {
+    use shieldnav_core::world::{MovingObstacle, Polygon, Pose2, Scenario, Segment, StaticMap, Trajectory};
+    let mut map = StaticMap::new();
+    map.add_segment(Segment::new([-5.0, 1.0], [5.0, 1.0], 2.0)).unwrap();
+    map.add_polygon(Polygon::rect(3.0, -2.0, 5.0, 0.0, 1.0)).unwrap();
+    let chair = MovingObstacle { name: "chair".into(), shape: Polygon::rect(-1.0, -1.0, 1.0, 1.0, 1.0), trajectory: Trajectory::fixed(Pose2::new(-4.0, -3.0, 0.0)) };
+    let world = |start: Pose2| {
+        let mut s = Scenario::new("s", map.clone(), start);
+        s.obstacles.push(chair.clone());
+        World::new(s, WorldConfig::default())
+    };
+    world(Pose2::new(0.0, 0.0, 0.0)).unwrap();
+    for (start, what) in [(Pose2::new(0.0, 0.9, 0.0), "crosses or touches the wall"), (Pose2::new(0.0, 0.5, 1.5), "crosses or touches the wall"), (Pose2::new(4.0, -1.0, 0.0), "inside polygons[0]"), (Pose2::new(-4.0, -3.0, 0.3), "inside the obstacle `chair`")] {
+        let e = world(start).unwrap_err().to_string();
+        assert!(e.contains("`start`") && e.contains(what), "{start:?}: {e}");
+    }
+}

@@ -291,6 +291,9 @@ pub fn episode_config(
         }
         site.ros_map.simplify = t;
     }
+    if c.world.lidar.channels == 1 && c.world.lidar.vertical_fov != EpisodeConfig::default().world.lidar.vertical_fov {
+        return Err(invalid("lidar_vertical_fov", "applies to multi-channel LIDARs (lidar_channels > 1); a planar ring has none"));
+    }
     c.world.lidar.validate().map_err(|e| keyed(e, Some(kw)))?;
     c.world.robot.validate().map_err(|e| keyed(e, Some(kw)))?;
     site.generator.footprint = shieldnav_core::world::Footprint {

@@ -14,11 +14,11 @@ use numpy::ndarray::{Array1, Array2, ArrayBase, Data, Dimension};
 use numpy::{Element, IntoPyArray, PyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBool, PyDict};
 use shieldnav_core::robot::{RobotShape, TrackerConfig};
 use shieldnav_core::sensors::{LidarConfig, LidarMount};
 use shieldnav_core::world::generate::{GeneratorConfig, SiteKind};
-use shieldnav_core::world::{RosMapOptions, World, WorldConfig};
+use shieldnav_core::world::{Footprint, RosMapOptions, World, WorldConfig};
 
 use crate::errors::{invalid, to_py, InvalidArgumentError};
 use shieldnav_core::Error;
@@ -78,6 +78,15 @@ impl Views {
     }
 }
 
+/// A count (a seed) from a Python int ≥ 0; `True`/`False` and negative or fractional numbers
+/// are errors naming `name` (`procedural=True` was site seed 1).
+fn count(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<u64> {
+    if obj.is_instance_of::<PyBool>() {
+        return Err(invalid(name, format!("expected an integer seed >= 0, got {}", obj.repr()?)));
+    }
+    obj.extract::<u64>().map_err(|_| invalid(name, format!("expected an integer seed from 0 to 2**64 - 1, got {}", obj.repr().map(|r| r.to_string()).unwrap_or_default())))
+}
+
 /// A simulated corridor world: walls, scripted obstacles, the robot's rapier body and
 /// tracker, an exact LIDAR (seen from the true pose) and a faulty odometry.
 ///
@@ -93,7 +102,7 @@ pub struct PyWorld {
 #[pymethods]
 impl PyWorld {
     #[new]
-    #[pyo3(signature = (*, preset=None, procedural=None, kind="office", ros_map=None, scenario=None, seed=0, dt=0.02,
+    #[pyo3(signature = (*, preset=None, procedural=None, kind="office", ros_map=None, scenario=None, seed=None, dt=0.02,
         channels=1, columns=1024, min_range=0.1, max_range=20.0, range_noise_std=0.01, dropout=0.0, rate_hz=10.0,
         vertical_fov=(-std::f64::consts::FRAC_PI_4, std::f64::consts::FRAC_PI_4), mount=(0.0, 0.0, 0.5, 0.0),
         robot_length=1.1, robot_width=0.5, corner_radius=0.0, unknown_is_wall=true, unreachable_walls=false, simplify=None))]
@@ -101,11 +110,11 @@ impl PyWorld {
     fn new(
         py: Python<'_>,
         preset: Option<String>,
-        procedural: Option<u64>,
+        procedural: Option<&Bound<'_, PyAny>>,
         kind: &str,
         ros_map: Option<PathBuf>,
         scenario: Option<PathBuf>,
-        seed: u64,
+        seed: Option<&Bound<'_, PyAny>>,
         dt: f64,
         channels: usize,
         columns: usize,
@@ -127,8 +136,21 @@ impl PyWorld {
         if sources != 1 {
             return Err(InvalidArgumentError::new_err(format!("give exactly one of preset, procedural, ros_map, scenario (got {sources})")));
         }
+        let procedural = procedural.map(|p| count("procedural", p)).transpose()?;
+        let seed = seed.map(|s| count("seed", s)).transpose()?.unwrap_or(0);
+        // (keywords of another source would be silently ignored)
         if simplify.is_some() && ros_map.is_none() {
             return Err(InvalidArgumentError::new_err("invalid `simplify`: it applies to `ros_map` worlds only (their walls' contours)"));
+        }
+        if ros_map.is_none() && (!unknown_is_wall || unreachable_walls) {
+            let key = if unknown_is_wall { "unreachable_walls" } else { "unknown_is_wall" };
+            return Err(invalid(key, "applies to `ros_map` worlds only"));
+        }
+        if procedural.is_none() && kind != "office" {
+            return Err(invalid("kind", "applies to `procedural` worlds only"));
+        }
+        if channels == 1 && vertical_fov != LidarConfig::default().vertical_fov {
+            return Err(invalid("vertical_fov", "applies to multi-channel LIDARs (channels > 1); a planar ring has none"));
         }
         let kind = match kind {
             "office" => SiteKind::Office,
@@ -152,7 +174,13 @@ impl PyWorld {
                 if let Some(name) = preset {
                     World::from_preset(&name, config)
                 } else if let Some(site) = procedural {
-                    World::from_procedural(site, &GeneratorConfig { kind, ..Default::default() }, config)
+                    // (every site admits this robot's footprint, not the default one)
+                    let footprint = Footprint { length: robot_length, width: robot_width };
+                    World::from_procedural(site, &GeneratorConfig { kind, footprint, ..Default::default() }, config).map_err(|e| match e {
+                        // (the generator's site seed is this constructor's `procedural`)
+                        Error::InvalidArgument { name: "seed", reason } => Error::InvalidArgument { name: "procedural", reason },
+                        e => e,
+                    })
                 } else if let Some(path) = ros_map {
                     let simplify = simplify.unwrap_or(RosMapOptions::default().simplify);
                     World::from_ros_map(path, &RosMapOptions { unknown_is_wall, unreachable_walls, simplify, ..Default::default() }, config)
@@ -164,6 +192,7 @@ impl PyWorld {
                 // (the robot's fields as this constructor's keywords name them)
                 Error::InvalidArgument { name: "length", reason } => invalid("robot_length", reason),
                 Error::InvalidArgument { name: "width", reason } => invalid("robot_width", reason),
+                Error::InvalidArgument { name: "footprint", reason } => invalid("robot_length/robot_width", reason),
                 e => to_py(e),
             })?;
         let views = Views::new(&world);

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::world::{Point2, Pose2, Segment};
+use crate::world::{segments_cross, Point2, Pose2, Segment};
 
 /// The body outline: a `length × width` rectangle (m, length along the heading) whose corners
 /// are rounded with `corner_radius` (m; 0 for sharp corners). Default: Spot, 1.1 × 0.5 m.
@@ -72,20 +72,6 @@ pub fn footprint_segment_distance(shape: &RobotShape, pose: Pose2, s: &Segment) 
     };
     let d2 = [to_rect2(a), to_rect2(b)].into_iter().chain(corners.iter().map(|&c| to_seg2(c))).fold(Real::INFINITY, Real::min);
     (d2.sqrt() - r).max(0.0)
-}
-
-fn segments_cross(p: Point2, q: Point2, a: Point2, b: Point2) -> bool {
-    let o = |u: Point2, v: Point2, w: Point2| (v[0] - u[0]) * (w[1] - u[1]) - (v[1] - u[1]) * (w[0] - u[0]);
-    let (d1, d2, d3, d4) = (o(a, b, p), o(a, b, q), o(p, q, a), o(p, q, b));
-    ((d1 > 0.0) != (d2 > 0.0) || d1 == 0.0 || d2 == 0.0) && ((d3 > 0.0) != (d4 > 0.0) || d3 == 0.0 || d4 == 0.0) && {
-        // exclude parallel non-overlapping cases with a zero orientation
-        let within = |u: Point2, v: Point2, w: Point2| w[0] >= u[0].min(v[0]) - 1e-15 && w[0] <= u[0].max(v[0]) + 1e-15 && w[1] >= u[1].min(v[1]) - 1e-15 && w[1] <= u[1].max(v[1]) + 1e-15;
-        if d1 == 0.0 && d2 == 0.0 {
-            within(a, b, p) || within(a, b, q) || within(p, q, a)
-        } else {
-            true
-        }
-    }
 }
 
 #[cfg(test)]

@@ -14,7 +14,7 @@ use crate::world::{wrap_angle, Pose2};
 
 /// A scheduled odometry fault.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum OdometryFault {
     /// At `time` (s) the estimate is shifted by `(dx, dy)` (m, world frame).
     Jump {
@@ -43,6 +43,7 @@ pub enum OdometryFault {
 
 /// Drift parameters and fault schedule. The default is a perfect odometry.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct OdometryConfig {
     /// Standard deviation of the relative translation error (per metre travelled, unitless).
     pub translation_noise: Real,
@@ -79,6 +80,16 @@ impl OdometryConfig {
     }
 }
 
+/// How much earlier (s) than its time an update may come and still apply a fault: far below
+/// any control period, far above the rounding of a sum of steps.
+pub const FAULT_TIME_TOLERANCE: Real = 1e-9;
+
+/// Whether a fault at `time` is due in the update `(t_prev, t]`.
+fn due(time: Real, t_prev: Real, t: Real) -> bool {
+    let at = time - FAULT_TIME_TOLERANCE;
+    at > t_prev && at <= t
+}
+
 /// The running odometry estimate.
 #[derive(Debug, Clone)]
 pub struct Odometry {
@@ -90,10 +101,33 @@ pub struct Odometry {
 
 impl Odometry {
     /// Starts with the estimate equal to the true `start` pose at time `t0` (s).
+    ///
+    /// A jump or yaw jump scheduled at or before `t0` applies from the start (the estimate
+    /// starts off the truth); a later one at the first update at or after its time, within
+    /// [`FAULT_TIME_TOLERANCE`] (a jump at 20 s fires at the step of time 20 even if adding up
+    /// the steps rounds it to 19.999…).
     pub fn new(config: OdometryConfig, start: Pose2, t0: Real) -> Result<Self> {
         config.validate()?;
         start.validate("start")?;
-        Ok(Self { config, estimate: start, last_true: start, last_time: t0 })
+        let mut odo = Self { config, estimate: start, last_true: start, last_time: t0 };
+        odo.apply_faults(Real::NEG_INFINITY, t0);
+        Ok(odo)
+    }
+
+    /// Applies the jumps and yaw jumps due in `(t_prev, t]` (within the tolerance).
+    fn apply_faults(&mut self, t_prev: Real, t: Real) {
+        for f in &self.config.faults {
+            match *f {
+                OdometryFault::Jump { time, dx, dy } if due(time, t_prev, t) => {
+                    self.estimate.x += dx;
+                    self.estimate.y += dy;
+                }
+                OdometryFault::YawJump { time, dyaw } if due(time, t_prev, t) => {
+                    self.estimate.yaw = wrap_angle(self.estimate.yaw + dyaw);
+                }
+                _ => {}
+            }
+        }
     }
 
     /// The current estimate.
@@ -124,18 +158,7 @@ impl Odometry {
             dyaw += c.yaw_bias * (t - t_prev);
             self.estimate = self.estimate.compose(&Pose2::new(dx, dy, dyaw));
         }
-        for f in &c.faults {
-            match *f {
-                OdometryFault::Jump { time, dx, dy } if time > t_prev && time <= t => {
-                    self.estimate.x += dx;
-                    self.estimate.y += dy;
-                }
-                OdometryFault::YawJump { time, dyaw } if time > t_prev && time <= t => {
-                    self.estimate.yaw = wrap_angle(self.estimate.yaw + dyaw);
-                }
-                _ => {}
-            }
-        }
+        self.apply_faults(t_prev, t);
         self.last_true = true_pose;
         self.last_time = t;
         self.estimate

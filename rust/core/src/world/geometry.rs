@@ -38,6 +38,7 @@ pub fn norm2(a: Point2) -> Real {
 /// assert!((w[0] - 1.0).abs() < 1e-12 && (w[1] - 3.0).abs() < 1e-12);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Pose2 {
     /// Position x (m).
     pub x: Real,
@@ -108,6 +109,7 @@ pub fn wrap_angle(a: Real) -> Real {
 /// sensor in free space can only see it from the right, so the LIDAR skips it from the left
 /// (back-face culling). Walls traced from occupancy grids are one-sided; others are not.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Segment {
     /// First end point (m).
     pub a: Point2,
@@ -178,6 +180,7 @@ impl Segment {
 
 /// A simple polygon (a piece of furniture, a pillar) extruded from the floor to `height`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Polygon {
     /// Vertices in order (either orientation), at least three, not repeated at the end.
     pub vertices: Vec<Point2>,
@@ -227,15 +230,56 @@ impl Polygon {
         inside
     }
 
-    /// Checks vertex count, finiteness and height.
+    /// Checks vertex count, finiteness and height, and that the outline is simple (no two
+    /// edges but neighbours meet: a crossed outline has no inside to face).
     pub fn validate(&self, name: &'static str) -> Result<()> {
-        if self.vertices.len() < 3 {
-            return Err(Error::invalid(name, format!("needs at least 3 vertices, got {}", self.vertices.len())));
+        let n = self.vertices.len();
+        if n < 3 {
+            return Err(Error::invalid(name, format!("needs at least 3 vertices, got {n}")));
         }
         for e in self.edges() {
             e.validate(name)?;
         }
+        let v = &self.vertices;
+        for i in 0..n {
+            for j in i + 2..n {
+                if i == 0 && j == n - 1 {
+                    continue; // neighbours across the closing edge
+                }
+                if segments_cross(v[i], v[(i + 1) % n], v[j], v[(j + 1) % n]) {
+                    return Err(Error::invalid(name, format!("must be a simple polygon: its edges {i} and {j} meet ({:?} → {:?} and {:?} → {:?})", v[i], v[(i + 1) % n], v[j], v[(j + 1) % n])));
+                }
+            }
+        }
         Ok(())
+    }
+
+    /// Whether the outline is convex (every turn the same way; straight corners allowed).
+    pub fn is_convex(&self) -> bool {
+        let v = &self.vertices;
+        let n = v.len();
+        let turns = (0..n).map(|i| cross2(sub2(v[(i + 1) % n], v[i]), sub2(v[(i + 2) % n], v[(i + 1) % n])));
+        let (mut left, mut right) = (false, false);
+        for t in turns {
+            left |= t > 0.0;
+            right |= t < 0.0;
+        }
+        !(left && right)
+    }
+}
+
+/// Whether the segments `p → q` and `a → b` cross or touch (collinear ones if they overlap).
+pub(crate) fn segments_cross(p: Point2, q: Point2, a: Point2, b: Point2) -> bool {
+    let o = |u: Point2, v: Point2, w: Point2| (v[0] - u[0]) * (w[1] - u[1]) - (v[1] - u[1]) * (w[0] - u[0]);
+    let (d1, d2, d3, d4) = (o(a, b, p), o(a, b, q), o(p, q, a), o(p, q, b));
+    ((d1 > 0.0) != (d2 > 0.0) || d1 == 0.0 || d2 == 0.0) && ((d3 > 0.0) != (d4 > 0.0) || d3 == 0.0 || d4 == 0.0) && {
+        // exclude parallel non-overlapping cases with a zero orientation
+        let within = |u: Point2, v: Point2, w: Point2| w[0] >= u[0].min(v[0]) - 1e-15 && w[0] <= u[0].max(v[0]) + 1e-15 && w[1] >= u[1].min(v[1]) - 1e-15 && w[1] <= u[1].max(v[1]) + 1e-15;
+        if d1 == 0.0 && d2 == 0.0 {
+            within(a, b, p) || within(a, b, q) || within(p, q, a)
+        } else {
+            true
+        }
     }
 }
 

@@ -12,6 +12,7 @@ use crate::math::Real;
 /// Piecewise-linear key poses `(t, pose)`; before the first key and after the last the pose is
 /// held. Yaw is interpolated along the shorter arc.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Trajectory {
     /// Strictly increasing times (s) with the poses reached then.
     pub keys: Vec<(Real, Pose2)>,
@@ -95,6 +96,7 @@ impl Trajectory {
 
 /// A scripted kinematic obstacle: a solid shape in its own frame moved along a trajectory.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MovingObstacle {
     /// A name for reports (`"chair"`, `"door"`, ...).
     pub name: String,
@@ -108,6 +110,10 @@ impl MovingObstacle {
     /// Checks the shape and trajectory.
     pub fn validate(&self) -> Result<()> {
         self.shape.validate("obstacle.shape")?;
+        if !self.shape.is_convex() {
+            // (the physics collides with the hull, the LIDAR would see the outline)
+            return Err(Error::invalid("obstacle.shape", format!("`{}`: must be convex (a moving body collides as its convex hull; make a non-convex one of several obstacles), got {:?}", self.name, self.shape.vertices)));
+        }
         self.trajectory.validate()
     }
 

@@ -31,6 +31,7 @@ use super::map::StaticMap;
 use super::moving::{MovingObstacle, Trajectory};
 use crate::error::{Error, Result};
 use crate::math::Real;
+use crate::robot::{footprint_segment_distance, RobotShape};
 use crate::sensors::{OdometryConfig, OdometryFault};
 
 /// How far from the origin (m) everything of a scenario may lie: walls, start, goal,
@@ -161,6 +162,34 @@ impl Scenario {
                     time(start, "odometry.faults")?;
                     time(end, "odometry.faults")?;
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// That the robot's footprint `shape` at the start is in free space: it crosses or
+    /// touches no wall (of the map or of an obstacle where it is at time 0) and stands inside
+    /// no polygon or obstacle (whose walls it would then not touch). The error names `start`.
+    pub fn check_start(&self, shape: &RobotShape) -> Result<()> {
+        let p = self.start;
+        let reach = 0.5 * shape.length.hypot(shape.width);
+        let at = |what: String| Error::invalid("start", format!("the robot's footprint ({} × {} m) at ({}, {}, yaw {}) {what}", shape.length, shape.width, p.x, p.y, p.yaw));
+        let mut moving = Vec::new();
+        for o in &self.obstacles {
+            o.segments_at(0.0, &mut moving);
+        }
+        for w in self.map.segments.iter().chain(&moving) {
+            if w.distance_to_point([p.x, p.y]) <= reach && footprint_segment_distance(shape, p, w) <= 0.0 {
+                return Err(at(format!("crosses or touches the wall {:?} → {:?}", w.a, w.b)));
+            }
+        }
+        if let Some(i) = self.map.polygons.iter().position(|q| q.contains([p.x, p.y])) {
+            return Err(at(format!("stands inside polygons[{i}]")));
+        }
+        for o in &self.obstacles {
+            let pose = o.trajectory.pose_at(0.0);
+            if o.shape.contains(pose.inverse_transform_point([p.x, p.y])) {
+                return Err(at(format!("stands inside the obstacle `{}` (at time 0)", o.name)));
             }
         }
         Ok(())
@@ -308,6 +337,33 @@ mod tests {
         // the paper's jump of 100 m is well within
         let ok = format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "odometry": {{{odo}, "faults": [{{"kind": "jump", "time": 20.0, "dx": 100.0, "dy": 1.5}}]}}}}"#);
         Scenario::from_json_str(&ok, "mine.json").unwrap();
+    }
+
+    /// Unknown keys anywhere are errors naming them (in walls, poses, shapes, trajectories,
+    /// the odometry and its faults they were ignored: a misspelt `one_sided` left a wall
+    /// two-sided); a crossed polygon and a non-convex obstacle too.
+    #[test]
+    fn unknown_keys_at_any_depth_and_bad_shapes_are_errors() {
+        let base = DOC_EXAMPLE.to_string();
+        for (from, to, key) in [
+            (r#""height": 2.0}]"#, r#""height": 2.0, "one_sidd": true}]"#, "one_sidd"),
+            (r#""start": {"x": 1, "y": 0, "yaw": 0}"#, r#""start": {"x": 1, "y": 0, "yaw": 0, "theta": 1}"#, "theta"),
+            (r#""height": 0.8}"#, r#""height": 0.8, "colour": "red"}"#, "colour"),
+            (r#""trajectory": {"keys""#, r#""trajectory": {"loop": true, "keys""#, "loop"),
+            (r#"[9.0, {"x": 9, "y": 0.5, "yaw": 0}]"#, r#"[9.0, {"x": 9, "y": 0.5, "yaw": 0, "z": 1}]"#, "`z`"),
+            (r#""yaw_bias": 0.0,"#, r#""yaw_bias": 0.0, "drift": 1,"#, "drift"),
+            (r#""dx": 120.0, "dy": 0.0}"#, r#""dx": 120.0, "dy": 0.0, "dyaw": 0.3}"#, "dyaw"),
+        ] {
+            assert!(base.contains(from), "{from}");
+            let err = Scenario::from_json_str(&base.replacen(from, to, 1), "k.json").unwrap_err().to_string();
+            assert!(err.starts_with("k.json: ") && err.contains(key), "{key}: {err}");
+        }
+        let crossed = base.replace("[[5, 0.4], [5.6, 0.4], [5.6, 1], [5, 1]]", "[[5, 0.4], [5.6, 1], [5.6, 0.4], [5, 1]]");
+        let err = Scenario::from_json_str(&crossed, "k.json").unwrap_err().to_string();
+        assert!(err.contains("polygons[0]") && err.contains("simple polygon"), "{err}");
+        let notch = base.replace("[[-0.25, -0.25], [0.25, -0.25], [0.25, 0.25], [-0.25, 0.25]]", "[[-0.25, -0.25], [0.25, -0.25], [0.25, 0.25], [0.0, 0.0], [-0.25, 0.25]]");
+        let err = Scenario::from_json_str(&notch, "k.json").unwrap_err().to_string();
+        assert!(err.contains("obstacles[0]") && err.contains("must be convex"), "{err}");
     }
 
     #[test]

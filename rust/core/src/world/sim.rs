@@ -154,6 +154,8 @@ pub struct World {
     odometry: Odometry,
     rng: ChaCha8Rng,
     time: Real,
+    /// Control periods stepped (the time is `steps · dt`).
+    steps: u64,
     next_scan: Real,
     scan: Scan,
     scan_body_pose: Pose2,
@@ -194,6 +196,8 @@ impl World {
 
     fn build(scenario: Scenario, config: WorldConfig, mesh: Option<Arc<ScanMesh>>) -> Result<Self> {
         scenario.validate()?;
+        config.robot.validate()?;
+        scenario.check_start(&config.robot)?;
         if !(config.dt.is_finite() && config.dt > 0.0 && config.dt <= 0.1) {
             return Err(Error::invalid("dt", format!("must be in (0, 0.1] s, got {}", config.dt)));
         }
@@ -218,6 +222,7 @@ impl World {
             odometry,
             rng: ChaCha8Rng::seed_from_u64(config.seed),
             time: 0.0,
+            steps: 0,
             next_scan: 0.0,
             scan: Scan::default(),
             scan_body_pose: Pose2::default(),
@@ -289,7 +294,9 @@ impl World {
     pub fn step(&mut self, command: [Real; 3]) -> Result<StepOutcome> {
         let dt = self.config.dt;
         let tr = self.tracker.step(command, dt)?;
-        let t_next = self.time + dt;
+        // (the steps times dt, not a running sum: 1 000 steps of 0.02 s added up to 19.99999…,
+        // and what is scheduled at 20 s came a step late)
+        let t_next = (self.steps + 1) as Real * dt;
         self.contacts = if self.free_step(tr.velocity, dt, t_next) {
             self.free_steps += 1;
             self.physics.step_free(tr.velocity, dt, &self.scenario.obstacles, t_next)?
@@ -297,6 +304,7 @@ impl World {
             self.physics.step(tr.velocity, dt, &self.scenario.obstacles, t_next)?
         };
         self.time = t_next;
+        self.steps += 1;
         let true_pose = self.physics.robot_pose();
         let estimated_pose = self.odometry.update(self.time, true_pose, &mut self.rng);
         let scanned = self.time >= self.next_scan - 1e-9;
