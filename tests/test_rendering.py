@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from shieldnav.exceptions import InvalidArgumentError
+from shieldnav.exceptions import InvalidArgumentError, ShieldnavError
 from shieldnav.rendering import (COLORS, HumanWindow, RenderFrame, TopDownRenderer, fit_bounds,
                                  save_video)
 
@@ -278,6 +278,7 @@ def test_human_window_with_a_stand_in_pygame(monkeypatch):
     pg = types.SimpleNamespace(
         QUIT="quit",
         display=types.SimpleNamespace(init=lambda: calls.append("init"),
+                                      get_driver=lambda: "x11",
                                       set_mode=lambda size: calls.append(("mode", size)) or screen,
                                       set_caption=lambda title: None,
                                       flip=lambda: calls.append("flip"),
@@ -295,3 +296,39 @@ def test_human_window_with_a_stand_in_pygame(monkeypatch):
     assert window.show(rgb) is False and calls[-1] == "quit"  # the user closed the window
     window.close()
     assert calls.count("quit") == 1
+
+
+def test_human_window_without_a_display_is_an_error(monkeypatch):
+    """SDL without a display falls back to its offscreen driver: render_mode="human" then
+    drew nowhere and returned None silently."""
+    import types
+
+    calls = []
+    pg = types.SimpleNamespace(display=types.SimpleNamespace(init=lambda: calls.append("init"), get_driver=lambda: "offscreen", quit=lambda: calls.append("quit")))
+    monkeypatch.setitem(sys.modules, "pygame", pg)
+    monkeypatch.delenv("SDL_VIDEODRIVER", raising=False)
+    with pytest.raises(ShieldnavError, match="needs a display.*rgb_array"):
+        HumanWindow(64, 48).show(np.zeros((48, 64, 3), np.uint8))
+    assert calls == ["init", "quit"]
+    # asked for on purpose, it draws nowhere without complaint
+    monkeypatch.setenv("SDL_VIDEODRIVER", "offscreen")
+    pg.display.set_mode = lambda size: types.SimpleNamespace(blit=lambda *a: None)
+    pg.display.set_caption = lambda title: None
+    pg.display.flip = lambda: None
+    pg.event = types.SimpleNamespace(get=lambda: [])
+    pg.QUIT = "quit"
+    pg.image = types.SimpleNamespace(frombuffer=lambda *a: None)
+    pg.time = types.SimpleNamespace(Clock=lambda: types.SimpleNamespace(tick=lambda fps: None))
+    assert HumanWindow(64, 48).show(np.zeros((48, 64, 3), np.uint8)) is True
+
+
+def test_status_line_shows_no_h_before_the_first_step():
+    import gymnasium as gym
+
+    env = gym.make("shieldnav/ConstrictedPassage-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    text = env.unwrapped.render_frame().text
+    assert "H = –" in text[1] and "nan" not in " ".join(text)
+    env.step(np.zeros(env.action_space.shape, np.float32))
+    assert "H = –" not in env.unwrapped.render_frame().text[1]
+    env.close()

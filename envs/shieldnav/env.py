@@ -250,7 +250,8 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         (length, width), semi_axes, crop = self._episode.geometry
         text = (
             f"{self._episode.name}  t = {d['time']:.2f} s",
-            f"coverage {100 * d['coverage']:.1f} %   H = {d['H']:.3f}",
+            # (no shield call before the first step: no H yet)
+            f"coverage {100 * d['coverage']:.1f} %   H = " + (f"{d['H']:.3f}" if np.isfinite(d["H"]) else "–"),
             f"odometry error {np.hypot(est[0] - pose[0], est[1] - pose[1]):.2f} m",
         )
         return RenderFrame(

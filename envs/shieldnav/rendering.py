@@ -21,7 +21,7 @@ from typing import Any, Sequence
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from .exceptions import InvalidArgumentError
+from .exceptions import InvalidArgumentError, ShieldnavError
 
 _EXTRA = 'pip install "shieldnav[render]"'
 
@@ -316,6 +316,11 @@ class HumanWindow:
             except ImportError as err:
                 raise ImportError(f"HumanWindow needs pygame: {_EXTRA}") from err
             pygame.display.init()
+            # (without a display SDL falls back to drawing nowhere: say so instead)
+            driver = pygame.display.get_driver()
+            if driver in ("offscreen", "dummy") and os.environ.get("SDL_VIDEODRIVER") != driver:
+                pygame.display.quit()
+                raise ShieldnavError(f"render_mode='human' needs a display (SDL found none and chose {driver!r}); use render_mode='rgb_array' and save the frames (shieldnav.save_video), or set SDL_VIDEODRIVER={driver} to draw nowhere on purpose")
             self._pg, self._clock = pygame, pygame.time.Clock()
             self._screen = pygame.display.set_mode((self.width, self.height))
             pygame.display.set_caption("shieldnav")

@@ -131,7 +131,15 @@ impl PyShield {
         Ok(Self { inner: Shield::new(config).map_err(to_py)? })
     }
 
-    /// Filters `u_nom` against a body-frame scan. See `shieldnav.Shield.filter`.
+    /// filter(points, u_nom, yaw=None, omega=None, rotation=None, extra_A=None, extra_b=None)
+    ///
+    /// The safe command nearest `u_nom` (world frame) against a body-frame scan: `points`
+    /// float32 or float64 (N, 2) or (N, 3), C-contiguous, read without a copy. A planar shield
+    /// takes `yaw` (rad) and the yaw rate `omega` (rad/s); a 3D one `rotation` (3x3,
+    /// body-to-world) or `yaw`, and `omega` as the body angular velocity (3 values).
+    /// `extra_A @ u >= extra_b` adds rows, solved with the barrier's by Clarabel. Returns a
+    /// `ShieldOutcome` (u, H, h_min, grad_p, dH_dt, num_points, active, feasible,
+    /// solve_time_ns); bad input raises `InvalidArgumentError` naming the argument.
     #[pyo3(signature = (points, u_nom, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn filter(
