@@ -27,6 +27,7 @@ and the environment's step, not the tracing or the GIF's rendering.
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import os
 import sys
 import tempfile
@@ -116,7 +117,10 @@ def run_local(todo: list[dict[str, Any]], workers: int) -> Iterator[dict[str, An
         for t in todo:
             yield run_episode(t)
         return
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    # a forked child of a parent that has loaded torch (an SB3 --policy) deadlocks in torch's
+    # thread pools: spawn fresh interpreters then, fork (fast, keeps the parent's state) otherwise
+    context = multiprocessing.get_context("spawn" if "torch" in sys.modules else None)
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         futures = [pool.submit(run_episode, t) for t in todo]
         try:
             for f in as_completed(futures):

@@ -8,6 +8,7 @@ gives the same metrics (everything but wall times) on any backend.
 from __future__ import annotations
 
 import importlib
+import sys
 import time
 from pathlib import Path
 from typing import Any, Callable
@@ -31,7 +32,10 @@ def load_policy(spec: str, env: gym.Env[Any, Any]) -> tuple[Policy, Callable[[],
         agent = InspectionAgent(env)
         return agent.act, agent.reset
     if spec.endswith(".zip"):
-        from stable_baselines3 import PPO, SAC
+        try:
+            from stable_baselines3 import PPO, SAC
+        except ImportError as err:
+            raise InvalidArgumentError(f'invalid `policy`: loading {spec} needs stable-baselines3 ({err}): pip install "shieldnav[train]"') from err
 
         if not Path(spec).exists():
             raise InvalidArgumentError(f"invalid `policy`: the model file {spec} does not exist")
@@ -60,14 +64,20 @@ def load_policy(spec: str, env: gym.Env[Any, Any]) -> tuple[Policy, Callable[[],
     if ":" in spec:
         module, name = spec.split(":", 1)
         try:
-            factory = getattr(importlib.import_module(module), name)
-        except (ImportError, ValueError) as err:
-            raise InvalidArgumentError(f"invalid `policy`: cannot import the module {module!r} ({err})") from err
-        except AttributeError:
-            raise InvalidArgumentError(f"invalid `policy`: the module {module!r} has no {name!r}") from None
+            imported = importlib.import_module(module)
+        except Exception as err:  # noqa: BLE001 - the user's module may fail in any way: name it
+            raise InvalidArgumentError(f"invalid `policy`: cannot import the module {module!r} ({type(err).__name__}: {err})") from err
+        if not hasattr(imported, name):
+            raise InvalidArgumentError(f"invalid `policy`: the module {module!r} has no {name!r}")
+        factory = getattr(imported, name)
         if not callable(factory):
             raise InvalidArgumentError(f"invalid `policy`: {spec} is not callable")
-        policy = factory(env)
+        try:
+            policy = factory(env)
+        except Exception as err:  # noqa: BLE001 - the user's factory: name it and its error
+            raise InvalidArgumentError(f"invalid `policy`: {spec}(env) raised {type(err).__name__}: {err}") from err
+        if not callable(policy):
+            raise InvalidArgumentError(f"invalid `policy`: {spec}(env) returned {type(policy).__name__}, not a callable act(obs, info)")
         return policy, getattr(policy, "reset", lambda: None)
     raise InvalidArgumentError(f"invalid `policy`: expected 'scripted', a .zip SB3 model or 'module:callable', got {spec!r}")
 
@@ -79,11 +89,23 @@ def _space(space: Any) -> str:
 
 
 def check_policy(task: dict[str, Any]) -> None:
-    """Loads the task's policy on the task's environment, running nothing: raises what
-    :func:`run_episode` would raise for a bad policy spec, before any episode runs."""
+    """Loads the task's policy on the task's environment and steps it once from a reset:
+    raises :class:`InvalidArgumentError` for a policy that does not load, whose factory or
+    ``act`` fails, or whose action does not fit the action space, before any episode runs."""
+    spec = task.get("policy", "scripted")
     env = gym.make(task["env_id"], shield=task["shield"], **task.get("kwargs", {}))
     try:
-        load_policy(task.get("policy", "scripted"), env)
+        act, reset = load_policy(spec, env)
+        obs, info = env.reset(seed=int(task.get("seed", 0)))
+        try:
+            reset()
+            action = act(obs, info)
+        except Exception as err:  # noqa: BLE001 - the policy's own code: name it and its error
+            raise InvalidArgumentError(f"invalid `policy`: {spec} raised {type(err).__name__} on a reset observation: {err}") from err
+        try:
+            env.step(action)
+        except InvalidArgumentError as err:
+            raise InvalidArgumentError(f"invalid `policy`: {spec}'s action does not fit {_space(env.action_space)}: {err}") from err
     finally:
         env.close()
 
@@ -97,7 +119,7 @@ def run_episode(task: dict[str, Any]) -> dict[str, Any]:
     environment's step only: the tracing is not timed and the frames, captured during the
     episode, are drawn after it, so episodes with and without a video compare.
     """
-    kwargs = dict(task.get("kwargs", {}))
+    kwargs = {"report_timing": True, **task.get("kwargs", {})}  # (the shield's time per step)
     video_every = int(task.get("video_every", 0))
     env = gym.make(task["env_id"], shield=task["shield"], **kwargs)
     act, reset = load_policy(task.get("policy", "scripted"), env)
@@ -141,3 +163,9 @@ def run_episode(task: dict[str, Any]) -> dict[str, Any]:
         "series": series if task.get("trace") else None,
         "frames": frames,
     }
+
+
+if __name__ == "__main__":  # a library module: say which modules are command lines
+    print("agents.episodes is not a command line; the command lines are python -m agents.train, agents.benchmark "
+          "and agents.sweep (each with --help)", file=sys.stderr)
+    sys.exit(2)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import sys
 from collections import defaultdict
 from pathlib import Path
 from typing import Any, Iterable
@@ -136,3 +137,9 @@ def plot_scenario(scenario: str, traces: dict[str, dict[str, Any]], timing: dict
     fig.suptitle(scenario)
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+if __name__ == "__main__":  # a library module: say which modules are command lines
+    print("agents.report is not a command line; the command lines are python -m agents.train, agents.benchmark "
+          "and agents.sweep (each with --help)", file=sys.stderr)
+    sys.exit(2)

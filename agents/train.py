@@ -14,6 +14,7 @@ TensorBoard, ``progress.csv``) go to the run folder, and ``model.zip`` is what `
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 from pathlib import Path
 from typing import Any
@@ -33,10 +34,33 @@ try:
 except ImportError as err:  # pragma: no cover
     raise ImportError('training needs stable-baselines3 and torch: pip install "shieldnav[train]"') from err
 
-from agents.benchmark import positive_int
+from agents import benchmark
+from shieldnav.registration import ENV_IDS
 from shieldnav.sb3 import ShieldnavVecEnv
 
 ALGOS = {"ppo": PPO, "sac": SAC}
+#: Seeds SB3 accepts are below this (it seeds NumPy's global generator).
+SEED_END = 2**32
+
+
+def progress_bar_missing() -> str | None:
+    """Why SB3's progress bar (tqdm's rich bar) cannot be shown, or None when it can."""
+    try:
+        importlib.import_module("tqdm.rich")
+    except ImportError as err:
+        return f"the progress bar needs tqdm and rich ({err}): pip install tqdm rich"
+    return None
+
+
+def seed_number(text: str) -> int:
+    """argparse type: a seed SB3 accepts."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not 0 <= value < SEED_END:
+        raise argparse.ArgumentTypeError(f"must be in 0 … 2**32 − 1, got {value}")
+    return value
 
 
 def evaluate(model: Any, env_id: str, episodes: int, seed: int, **kwargs: Any) -> dict[str, float]:
@@ -81,13 +105,28 @@ class EvalSafety(BaseCallback):
 def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, seed: int, out: Path,
           eval_every: int = 10_000, eval_episodes: int = 3, tensorboard: bool = True, progress: bool = True,
           max_episode_steps: int | None = None, **env_kwargs: Any) -> Path:
-    """Trains and saves ``out/model.zip``; returns its path."""
+    """Trains and saves ``out/model.zip``; returns its path. Every argument is checked, and
+    the environments built, before ``out`` is created."""
     if algo not in ALGOS:
         raise InvalidArgumentError(f"invalid `algo`: expected one of {sorted(ALGOS)}, got {algo!r}")
-    for name, value in (("timesteps", timesteps), ("num_envs", num_envs), ("eval_every", eval_every), ("eval_episodes", eval_episodes)):
+    if env_id not in ENV_IDS:
+        raise InvalidArgumentError(f"invalid `env_id`: expected a shieldnav id ({', '.join(sorted(ENV_IDS))}), got {env_id!r}")
+    if shield not in benchmark.SHIELDS:
+        raise InvalidArgumentError(f"invalid `shield`: expected one of {benchmark.SHIELDS}, got {shield!r}")
+    if not 0 <= seed < SEED_END:
+        raise InvalidArgumentError(f"invalid `seed`: must be in 0 … 2**32 − 1, got {seed}")
+    counts = {"timesteps": timesteps, "num_envs": num_envs, "eval_every": eval_every, "eval_episodes": eval_episodes}
+    if max_episode_steps is not None:
+        counts["max_episode_steps"] = max_episode_steps
+    for name, value in counts.items():
         if value < 1:
             raise InvalidArgumentError(f"invalid `{name}`: must be at least 1, got {value}")
-    out.mkdir(parents=True, exist_ok=True)
+    if progress and (missing := progress_bar_missing()):
+        raise ImportError(f"{missing}, or pass progress=False")
+    eval_kwargs = {"shield": shield, **env_kwargs}
+    if max_episode_steps is not None:
+        eval_kwargs["max_episode_steps"] = eval_kwargs["time_limit"] = max_episode_steps
+    gym.make(env_id, **eval_kwargs).close()  # the environment's settings, checked before the run folder
     torch.manual_seed(seed)
     torch.set_num_threads(1)
     kwargs = {"shield": shield, **env_kwargs}
@@ -95,6 +134,7 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
         kwargs["max_episode_steps"] = max_episode_steps
     venv = VecCheckNan(VecMonitor(ShieldnavVecEnv(env_id, num_envs=num_envs, **kwargs)), raise_exception=True)
     venv.seed(seed)
+    out.mkdir(parents=True, exist_ok=True)
     tb = None
     if tensorboard:
         try:
@@ -109,9 +149,6 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
     if tb is None:
         # SB3 would otherwise log to a new folder under the system's temp folder on every run
         model.set_logger(configure_logger(str(out), ["csv"]))
-    eval_kwargs = {"shield": shield, **env_kwargs}
-    if max_episode_steps is not None:
-        eval_kwargs["max_episode_steps"] = eval_kwargs["time_limit"] = max_episode_steps
     evaluator = EvalSafety(env_id, eval_every, eval_episodes, seed + 10_000, eval_kwargs)
     checkpoints = CheckpointCallback(save_freq=max(eval_every // num_envs, 1), save_path=str(out / "checkpoints"), name_prefix=algo)
     model.learn(timesteps, callback=CallbackList([evaluator, checkpoints]), progress_bar=progress, tb_log_name=f"{algo}_{shield}")
@@ -128,18 +165,20 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
 def main(argv: list[str] | None = None) -> Path:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
-    ap.add_argument("--env", default="shieldnav/CorridorInspection-v0")
-    ap.add_argument("--shield", default="composite", choices=["composite", "distance", "hardmin", "none"])
-    ap.add_argument("--timesteps", type=positive_int, default=200_000)
-    ap.add_argument("--num-envs", type=positive_int, default=8)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--eval-every", type=positive_int, default=10_000)
-    ap.add_argument("--eval-episodes", type=positive_int, default=3)
-    ap.add_argument("--max-episode-steps", type=int, default=None)
+    ap.add_argument("--env", type=benchmark.env_id, default="shieldnav/CorridorInspection-v0")
+    ap.add_argument("--shield", default="composite", choices=benchmark.SHIELDS)
+    ap.add_argument("--timesteps", type=benchmark.positive_int, default=200_000)
+    ap.add_argument("--num-envs", type=benchmark.positive_int, default=8)
+    ap.add_argument("--seed", type=seed_number, default=0)
+    ap.add_argument("--eval-every", type=benchmark.positive_int, default=10_000)
+    ap.add_argument("--eval-episodes", type=benchmark.positive_int, default=3)
+    ap.add_argument("--max-episode-steps", type=benchmark.positive_int, default=None)
     ap.add_argument("--out", default=None, help="run folder (default runs/<algo>_<shield>_<seed>)")
     ap.add_argument("--no-tensorboard", action="store_true")
-    ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--no-progress", action="store_true", help="no progress bar (it needs tqdm and rich)")
     args = ap.parse_args(argv)
+    if not args.no_progress and (missing := progress_bar_missing()):
+        ap.error(f"{missing}, or pass --no-progress")
     out = Path(args.out or f"runs/{args.algo}_{args.shield}_{args.seed}")
     path = train(args.algo, args.env, args.shield, args.timesteps, args.num_envs, args.seed, out, args.eval_every,
                  args.eval_episodes, not args.no_tensorboard, not args.no_progress, args.max_episode_steps)

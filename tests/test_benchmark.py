@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import csv
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -52,6 +55,28 @@ def test_a_module_callable_policy_is_benchmarked(tmp_path):
 CP = "shieldnav/ConstrictedPassage-v0"
 
 
+def raising_factory(env):
+    raise RuntimeError("no weights here")
+
+
+def no_policy(env):
+    return None
+
+
+def two_numbers(env):
+    return lambda obs, info: np.zeros(2, np.float32)
+
+
+def too_fast(env):
+    return lambda obs, info: np.array([2.0, 0.0, 0.0], np.float32)
+
+
+def failing_act(env):
+    def act(obs, info):
+        raise KeyError("lidar")
+    return act
+
+
 @pytest.mark.parametrize("args, message", [
     (["--seeds", "0"], "argument --seeds: must be at least 1, got 0"),
     (["--workers", "0"], "argument --workers: must be at least 1, got 0"),
@@ -65,6 +90,17 @@ CP = "shieldnav/ConstrictedPassage-v0"
     (["--policy", "nosuch.mod:f"], "argument --policy: invalid `policy`: cannot import the module 'nosuch.mod'"),
     (["--policy", "agents.scripted:nosuch"], "argument --policy: invalid `policy`: the module 'agents.scripted' has no 'nosuch'"),
     (["--policy", "missing.zip"], "the model file missing.zip does not exist"),
+    (["--policy", "os:getcwd"], "argument --policy: invalid `policy`: os:getcwd(env) raised TypeError"),
+    (["--policy", "tests.test_benchmark:raising_factory"],
+     "argument --policy: invalid `policy`: tests.test_benchmark:raising_factory(env) raised RuntimeError: no weights here"),
+    (["--policy", "tests.test_benchmark:no_policy"],
+     "argument --policy: invalid `policy`: tests.test_benchmark:no_policy(env) returned NoneType, not a callable act(obs, info)"),
+    (["--policy", "tests.test_benchmark:two_numbers"],
+     "argument --policy: invalid `policy`: tests.test_benchmark:two_numbers's action does not fit Box(-1.0, 1.0, (3,), float32): "
+     "invalid `action`: expected shape (3,)"),
+    (["--policy", "tests.test_benchmark:too_fast"], "tests.test_benchmark:too_fast's action does not fit Box(-1.0, 1.0, (3,), float32)"),
+    (["--policy", "tests.test_benchmark:failing_act"],
+     "argument --policy: invalid `policy`: tests.test_benchmark:failing_act raised KeyError on a reset observation: 'lidar'"),
     (["--out", "/proc/shieldnav"], "argument --out: cannot write to the folder /proc/shieldnav"),
     (["--ray-address", "auto"], "argument --ray-address: needs --backend ray"),
 ])
@@ -75,6 +111,15 @@ def test_user_errors_are_usage_errors_naming_the_option_before_any_episode(args,
     assert exc.value.code == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("module", ["agents.report", "agents.episodes", "agents.scripted"])
+def test_library_modules_say_which_modules_are_command_lines(module):
+    root = Path(__file__).resolve().parents[1]
+    done = subprocess.run([sys.executable, "-m", module, "--help"], cwd=root, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and not done.stdout
+    assert done.stderr.splitlines() == [f"{module} is not a command line; the command lines are python -m agents.train, "
+                                        "agents.benchmark and agents.sweep (each with --help)"]
 
 
 def test_an_out_path_that_is_a_file_is_refused_before_any_episode(tmp_path, capsys, monkeypatch):

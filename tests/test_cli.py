@@ -3,17 +3,22 @@
 from __future__ import annotations
 
 import json
+import os
+import shutil
 import subprocess
 import sys
 import warnings
 from importlib.metadata import entry_points
+from pathlib import Path
 
 import numpy as np
 import pytest
 from PIL import Image
 
-from shieldnav import Shield
+from shieldnav import Shield, cli
 from shieldnav.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_console_script_points_at_main():
@@ -138,3 +143,50 @@ def test_errors_name_what_is_wrong(argv, message, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("shieldnav: error: ") and message in err, err
+
+
+def console_script():
+    """The installed ``shieldnav`` script next to this interpreter (its sys.path lacks the cwd)."""
+    script = shutil.which("shieldnav", path=str(Path(sys.executable).parent))
+    if script is None:
+        pytest.skip("no shieldnav console script next to the interpreter")
+    return script
+
+
+def test_console_script_runs_the_scripted_policy_from_the_repository_root(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    argv = [console_script(), "run", "shieldnav/ConstrictedPassage-v0", "--policy", "scripted", "--steps", "5"]
+    done = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["steps"] == 5
+    # elsewhere the advice is the one that works
+    done = subprocess.run(argv, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert done.stderr.startswith("shieldnav: error: invalid `--policy scripted`:") and "run from the repository root" in done.stderr
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["run", "shieldnav/ConstrictedPassage-v0", "--gif", "{tmp}/run.mp4"], "invalid `--gif`: writing .mp4 needs imageio and imageio-ffmpeg"),
+    (["run", "shieldnav/ConstrictedPassage-v0", "--gif", "{tmp}/nosuch/run.gif"], "invalid `--gif`: the folder {tmp}/nosuch does not exist"),
+    (["run", "shieldnav/ConstrictedPassage-v0", "--gif", "{tmp}/run.avi"], "invalid `--gif`: expected a .gif or .mp4 file name"),
+    (["run", "shieldnav/ConstrictedPassage-v0", "--gif", "{tmp}/folder.gif"], "invalid `--gif`: {tmp}/folder.gif is a folder"),
+    (["render", "shieldnav/ConstrictedPassage-v0", "--out", "{tmp}/site.txt"], "invalid `--out`: expected an image file name that Pillow writes"),
+    (["render", "shieldnav/ConstrictedPassage-v0", "--out", "{tmp}/site"], "invalid `--out`: expected an image file name that Pillow writes"),
+    (["render", "shieldnav/ConstrictedPassage-v0", "--out", "{tmp}/nosuch/site.png"], "invalid `--out`: the folder {tmp}/nosuch does not exist"),
+])
+def test_output_paths_are_refused_before_the_episode(argv, message, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "imageio", None)  # import imageio raises ImportError, installed or not
+    monkeypatch.setattr(cli, "_make", lambda *a, **k: pytest.fail("the environment was made"))
+    (tmp_path / "folder.gif").mkdir()
+    assert main([a.replace("{tmp}", str(tmp_path)) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("shieldnav: error: ") and err.count("\n") == 1 and message.replace("{tmp}", str(tmp_path)) in err, err
+
+
+def test_an_import_error_is_a_named_error_not_a_traceback(capsys, monkeypatch):
+    def needs_a_package(_):
+        raise ImportError('this needs a package: pip install "shieldnav[render]"')
+
+    monkeypatch.setattr(cli, "cmd_info", needs_a_package)
+    assert main(["info"]) == 2
+    assert capsys.readouterr().err == 'shieldnav: error: this needs a package: pip install "shieldnav[render]"\n'

@@ -328,7 +328,7 @@ def test_status_line_shows_no_h_before_the_first_step():
     env = gym.make("shieldnav/ConstrictedPassage-v0", render_mode="rgb_array")
     env.reset(seed=0)
     text = env.unwrapped.render_frame().text
-    assert "H = –" in text[1] and "nan" not in " ".join(text)
+    assert "H = n/a" in text[1] and "nan" not in " ".join(text)
     env.step(np.zeros(env.action_space.shape, np.float32))
-    assert "H = –" not in env.unwrapped.render_frame().text[1]
+    assert "H = n/a" not in env.unwrapped.render_frame().text[1]
     env.close()

@@ -4,6 +4,12 @@ benchmark loads and evaluates; one seed gives identical results twice."""
 from __future__ import annotations
 
 import json
+import os
+import re
+import signal
+import subprocess
+import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -15,7 +21,10 @@ from agents import benchmark, train  # noqa: E402
 from shieldnav.exceptions import InvalidArgumentError  # noqa: E402
 from shieldnav.sb3 import ShieldnavVecEnv  # noqa: E402
 
-COUNTS = {"timesteps": "--timesteps", "num_envs": "--num-envs", "eval_every": "--eval-every", "eval_episodes": "--eval-episodes"}
+COUNTS = {"timesteps": "--timesteps", "num_envs": "--num-envs", "eval_every": "--eval-every", "eval_episodes": "--eval-episodes",
+          "max_episode_steps": "--max-episode-steps"}
+CP = "shieldnav/ConstrictedPassage-v0"
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_ppo_trains_saves_reloads_and_is_benchmarked_identically_twice(tmp_path):
@@ -104,4 +113,67 @@ def test_train_names_a_count_below_one(name, tmp_path):
     kwargs = {"timesteps": 64, "num_envs": 1, "eval_every": 64, "eval_episodes": 1, name: 0}
     with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`: must be at least 1, got 0"):
         train.train("ppo", "shieldnav/ConstrictedPassage-v0", "composite", seed=0, out=tmp_path / "run", **kwargs)
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_model_is_benchmarked_on_two_workers(tmp_path):
+    """Loading the model imports torch in the benchmark's process: workers forked from it hung
+    for ever in torch's thread pools. A hang fails the test at the timeout."""
+    path = train.main(["--env", CP, "--timesteps", "256", "--num-envs", "1", "--eval-every", "256", "--eval-episodes", "1",
+                       "--max-episode-steps", "20", "--out", str(tmp_path / "run"), "--no-progress", "--no-tensorboard"])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    argv = [sys.executable, "-m", "agents.benchmark", "--scenarios", CP, "--shields", "composite", "none", "--seeds", "1",
+            "--workers", "2", "--max-steps", "20", "--policy", str(path), "--out", str(tmp_path / "bench"), "--no-plots"]
+    proc = subprocess.Popen(argv, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        _, err = proc.communicate(timeout=180)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)  # the benchmark and its workers
+        proc.communicate()
+        pytest.fail("the benchmark of a model on two workers hung")
+    assert proc.returncode == 0, err
+    episodes = json.loads((tmp_path / "bench" / "benchmark.json").read_text())["episodes"]
+    assert sorted(e["task"]["shield"] for e in episodes) == ["composite", "none"]
+    assert all(e["summary"]["steps"] == 20 for e in episodes)
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--env", "shieldnav/Foo-v0", "argument --env: unknown environment id 'shieldnav/Foo-v0'"),
+    ("--seed", "-1", "argument --seed: must be in 0 … 2**32 − 1, got -1"),
+    ("--seed", "4294967296", "argument --seed: must be in 0 … 2**32 − 1, got 4294967296"),
+])
+def test_command_line_rejects_an_unknown_env_and_a_bad_seed_before_training(option, value, message, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        train.main([option, value, "--out", str(tmp_path / "run"), "--no-progress", "--no-tensorboard"])
+    assert exc.value.code == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"env_id": "shieldnav/Foo-v0"}, "invalid `env_id`: expected a shieldnav id"),
+    ({"env_id": "CartPole-v1"}, "invalid `env_id`: expected a shieldnav id"),
+    ({"shield": "bogus"}, "invalid `shield`: expected one of"),
+    ({"seed": -1}, "invalid `seed`: must be in 0 … 2**32 − 1, got -1"),
+    ({"max_episode_steps": -5}, "invalid `max_episode_steps`: must be at least 1, got -5"),
+    ({"kappa": -1.0}, "invalid `kappa`"),
+])
+def test_train_refuses_bad_arguments_before_creating_the_run_folder(kwargs, message, tmp_path):
+    args = {"algo": "ppo", "env_id": CP, "shield": "composite", "timesteps": 64, "num_envs": 1, "seed": 0,
+            "out": tmp_path / "run", "progress": False, "tensorboard": False} | kwargs
+    with pytest.raises(InvalidArgumentError, match=re.escape(message)):
+        train.train(**args)
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_missing_progress_bar_package_is_reported_before_training(tmp_path, capsys, monkeypatch):
+    """SB3's progress bar is tqdm's rich bar: without rich, learn() failed after the run folder
+    was made (the README's command did)."""
+    monkeypatch.setitem(sys.modules, "tqdm.rich", None)  # import tqdm.rich now raises ImportError
+    with pytest.raises(SystemExit) as exc:
+        train.main(["--env", CP, "--timesteps", "64", "--out", str(tmp_path / "run"), "--no-tensorboard"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2
+    assert "error: the progress bar needs tqdm and rich" in err and "or pass --no-progress" in err
+    with pytest.raises(ImportError, match="the progress bar needs tqdm and rich"):
+        train.train("ppo", CP, "composite", 64, 1, 0, tmp_path / "run", tensorboard=False)
     assert not (tmp_path / "run").exists()

@@ -8,7 +8,8 @@
 
 ``--set key=value`` passes any environment keyword (``shieldnav.ENV_DEFAULTS``); values are
 read as JSON when they parse (numbers, lists, true/false/null), else as strings. Errors name
-what was wrong and exit with status 2.
+what was wrong and exit with status 2; output files (``--out``, ``--gif``) and ``--policy
+scripted`` are checked before anything runs.
 """
 
 from __future__ import annotations
@@ -16,7 +17,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+import tempfile
 import warnings
 from pathlib import Path
 from typing import Any, Sequence
@@ -44,6 +47,67 @@ def _settings(pairs: Sequence[str]) -> dict[str, Any]:
 def _at_least(option: str, value: int | None, low: int) -> None:
     if value is not None and value < low:
         raise ValueError(f"invalid `{option}`: must be at least {low}, got {value}")
+
+
+def _writable(option: str, path: str) -> None:
+    """A usage error unless a file can be written at ``path`` (its folder exists and takes one)."""
+    target = Path(path)
+    if target.is_dir():
+        raise ValueError(f"invalid `{option}`: {target} is a folder, not a file name")
+    folder = target.parent
+    if not folder.is_dir():
+        raise ValueError(f"invalid `{option}`: the folder {folder} does not exist")
+    try:
+        tempfile.TemporaryFile(dir=folder).close()
+    except OSError as err:
+        raise ValueError(f"invalid `{option}`: cannot write to the folder {folder}: {err.strerror or err}") from err
+
+
+def _check_image(path: str) -> None:
+    """``render --out``: a file name whose extension Pillow writes, in a writable folder."""
+    from PIL import Image
+
+    Image.init()
+    ext = Path(path).suffix.lower()
+    if Image.registered_extensions().get(ext) not in Image.SAVE:
+        raise ValueError(f"invalid `--out`: expected an image file name that Pillow writes (e.g. .png or .jpg), got {path!r}")
+    _writable("--out", path)
+
+
+def _check_video(path: str) -> None:
+    """``run --gif``: a .gif (Pillow) or .mp4 (imageio and imageio-ffmpeg) file name in a writable folder."""
+    ext = Path(path).suffix.lower()
+    if ext not in (".gif", ".mp4"):
+        raise ValueError(f"invalid `--gif`: expected a .gif or .mp4 file name, got {path!r}")
+    if ext == ".mp4":
+        try:
+            import imageio.v2  # noqa: F401
+            import imageio_ffmpeg  # noqa: F401
+        except ImportError as err:
+            raise ValueError(f'invalid `--gif`: writing .mp4 needs imageio and imageio-ffmpeg ({err}): pip install "shieldnav[render]"') from err
+    _writable("--gif", path)
+
+
+def _inspection_agent() -> Any:
+    """The scripted agent's class from the repository's agents/ folder: found on the Python path
+    or, failing that, in the current folder (the console script's path lacks it)."""
+    try:
+        from agents.scripted import InspectionAgent
+    except ModuleNotFoundError as err:
+        if err.name not in ("agents", "agents.scripted"):
+            raise ValueError(f"invalid `--policy scripted`: cannot import the scripted agent: {err}") from err
+        cwd = os.getcwd()
+        sys.path.insert(0, cwd)
+        try:
+            from agents.scripted import InspectionAgent
+        except ModuleNotFoundError as again:
+            if again.name not in ("agents", "agents.scripted"):
+                raise ValueError(f"invalid `--policy scripted`: cannot import the scripted agent: {again}") from again
+            raise ValueError(f"invalid `--policy scripted`: the scripted agent lives in the repository's agents/ folder, found neither "
+                             f"on the Python path nor in the current folder {cwd}: run from the repository root or add it to PYTHONPATH") from err
+        finally:
+            sys.path.remove(cwd)
+    return InspectionAgent
 
 
 def _make(env_id: str, settings: dict[str, Any], render: bool, shield: str | None = None) -> Any:
@@ -78,6 +142,7 @@ def cmd_render(args: argparse.Namespace) -> None:
     from PIL import Image
 
     _at_least("--seed", args.seed, 0)
+    _check_image(args.out)
     env = _make(args.env_id, _settings(args.set), render=True)
     env.reset(seed=args.seed)
     frame = env.render()
@@ -89,16 +154,15 @@ def cmd_render(args: argparse.Namespace) -> None:
 def cmd_run(args: argparse.Namespace) -> None:
     _at_least("--seed", args.seed, 0)
     _at_least("--steps", args.steps, 1)
+    if args.gif is not None:
+        _check_video(args.gif)
+    agent_class = _inspection_agent() if args.policy == "scripted" else None
     env = _make(args.env_id, _settings(args.set), render=args.gif is not None, shield=args.shield)
     obs, info = env.reset(seed=args.seed)
     rng = np.random.default_rng(args.seed)
     agent = None
-    if args.policy == "scripted":
-        try:
-            from agents.scripted import InspectionAgent
-        except ImportError as err:
-            raise ValueError("invalid `--policy scripted`: the scripted agent lives in the repository's agents/ folder; run from the repository root") from err
-        agent = InspectionAgent(env)
+    if agent_class is not None:
+        agent = agent_class(env)
         agent.reset()
     frames = []
     steps = 0
@@ -194,7 +258,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
         args.func(args)
-    except (ValueError, ShieldnavError, OSError) as err:
+    except (ValueError, ShieldnavError, OSError, ImportError) as err:
         print(f"shieldnav: error: {err}", file=sys.stderr)
         return 2
     return 0

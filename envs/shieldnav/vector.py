@@ -82,7 +82,7 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         time_limit: int | None = None,
         observation: str = "flat",
         render_mode: str | None = None,
-        report_timing: bool = True,
+        report_timing: bool = False,
         **config: Any,
     ) -> None:
         if not isinstance(num_envs, int) or num_envs < 1:
