@@ -219,9 +219,16 @@ def test_interrupted_run_keeps_finished_episodes(monkeypatch):
     assert len(results) == 1 and results[0]["task"]["shield"] == "composite"
 
 
-def test_ray_backend_gives_the_local_numbers(tmp_path):
+def test_ray_backend_gives_the_local_numbers(tmp_path, monkeypatch):
+    import shutil
+    import tempfile
+
     import ray
 
+    # Ray's session folders (logs, sockets) in a short folder of the test's, not /tmp/ray
+    # (a socket path must stay under 108 bytes: pytest's tmp_path is too long)
+    ray_tmp = tempfile.mkdtemp(prefix="ray")
+    monkeypatch.setenv("RAY_TMPDIR", ray_tmp)
     args = ["--scenarios", "shieldnav/ConstrictedPassage-v0", "shieldnav/DynamicObstacles-v0", "--shields", "composite", "none",
             "--seeds", "1", "--workers", "2", "--max-steps", "300", "--no-plots"]
     local = benchmark.main(args + ["--out", str(tmp_path / "local")])
@@ -229,6 +236,7 @@ def test_ray_backend_gives_the_local_numbers(tmp_path):
         remote = benchmark.main(args + ["--backend", "ray", "--out", str(tmp_path / "ray")])
     finally:
         ray.shutdown()
+        shutil.rmtree(ray_tmp, ignore_errors=True)
     timing = ("shield_us_mean", "shield_us_p99_6", "shield_us_max", "steps_per_s")
     assert local.keys() == remote.keys()
     for key in local:
