@@ -171,7 +171,9 @@ def test_errors_name_what_is_wrong(tmp_path):
     with pytest.raises(ValueError, match="invalid `robot_length`"):
         World(preset="odometry_jump", robot_length=0.0)
     # a value of the wrong type or sign: the exception's note names the argument (PyO3)
-    for kwargs, kind, name in [({"seed": -1}, OverflowError, "seed"), ({"dt": "0.1"}, TypeError, "dt"), ({"channels": -1}, OverflowError, "channels")]:
+    with pytest.raises(ValueError, match="invalid `seed`: expected an integer seed"):
+        World(preset="odometry_jump", seed=-1)
+    for kwargs, kind, name in [({"dt": "0.1"}, TypeError, "dt"), ({"channels": -1}, OverflowError, "channels")]:
         with pytest.raises(kind) as caught:
             World(preset="odometry_jump", **kwargs)
         assert f"'{name}'" in " ".join(getattr(caught.value, "__notes__", [])), caught.value
@@ -234,3 +236,42 @@ def test_scan_poses_and_contacts_are_live_read_only_views_without_copies():
         ranges[0, 0] = 1.0
     del w  # the views keep the world alive
     assert np.isfinite(ranges).any()
+
+
+def test_ros_map_border_is_a_wall_and_a_framed_yard_is_outside(tmp_path):
+    """ROS maps: the space beyond the image is unknown, so (with unknown_is_wall, the default)
+    the image's border is a wall where free cells meet it; free space framed by unknown cells
+    is outside, never the start; a misspelt YAML key is an error naming it."""
+
+    def write(name, cells, res):
+        """`cells`: rows from the top, 254 free, 0 occupied, 128 unknown."""
+        h, w = cells.shape
+        (tmp_path / f"{name}.pgm").write_bytes(f"P5\n{w} {h}\n255\n".encode() + cells.astype(np.uint8).tobytes())
+        (tmp_path / f"{name}.yaml").write_text(f"image: {name}.pgm\nresolution: {res}\norigin: [0.0, 0.0, 0.0]\n")
+        return str(tmp_path / f"{name}.yaml")
+
+    # 8 x 6 m of free cells, a room from 1 to 7 m by 1 to 5 m with a 1 m door west
+    img = np.full((60, 80), 254)
+    img[10:50, 10:70] = 0
+    img[11:49, 11:69] = 254
+    img[25:35, 10] = 254
+    w = World(ros_map=write("room", img, 0.1), range_noise_std=0.0)
+    x = w.walls[:, [0, 2]]
+    assert x.min() == 0.0 and x.max() == 8.0
+    assert 1.0 < w.true_pose[0] < 7.0 and 1.0 < w.true_pose[1] < 5.0
+    contact = False
+    for _ in range(400):  # backwards (west), out of the door, to the image's border
+        w.step(-1.0, 0.0, 0.0)
+        contact |= len(w.contacts) > 0
+    assert contact and 0.5 < w.true_pose[0] < 1.0
+    # a closed 6 x 4 m building in a larger yard framed by one row of unknown cells
+    img = np.full((160, 200), 254)
+    img[[0, -1], :] = 128
+    img[:, [0, -1]] = 128
+    img[38:122, 38:162] = 0
+    img[40:120, 40:160] = 254
+    w = World(ros_map=write("yard", img, 0.05), range_noise_std=0.0)
+    assert 2.0 < w.true_pose[0] < 8.0 and 2.0 < w.true_pose[1] < 6.0
+    (tmp_path / "typo.yaml").write_text("image: yard.pgm\nresolution: 0.05\norigin: [0, 0, 0]\noccupied_tresh: 0.99\n")
+    with pytest.raises(ValueError, match=r"typo\.yaml: line 4: unknown key `occupied_tresh`; the keys are image, resolution"):
+        World(ros_map=str(tmp_path / "typo.yaml"))

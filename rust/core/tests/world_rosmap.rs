@@ -81,10 +81,12 @@ fn check_walls_and_start(unknown_is_wall: bool, unreachable: bool) {
         let start = g.world_to_cell([m.scenario.start.x, m.scenario.start.y]).unwrap();
         let region = flood(g, start, solid);
         let on_grid = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < g.width && (j as usize) < g.height;
-        // the solid side of an edge: solid cells, or (walls of the region only) cells off the region
-        let occ = |i: i64, j: i64| on_grid(i, j) && if unreachable { solid(g.get(i as usize, j as usize)) } else { !region[j as usize * g.width + i as usize] };
-        // an edge between a solid and an open side (with the region: both on the grid)
-        let edge = |p: (i64, i64), q: (i64, i64)| occ(p.0, p.1) != occ(q.0, q.1) && (unreachable || (on_grid(p.0, p.1) && on_grid(q.0, q.1)));
+        // the solid side of an edge: solid cells, or (walls of the region only) cells off the
+        // region; beyond the image lies unknown space, solid with unknown_is_wall
+        let occ = |i: i64, j: i64| if on_grid(i, j) { if unreachable { solid(g.get(i as usize, j as usize)) } else { !region[j as usize * g.width + i as usize] } } else { unknown_is_wall };
+        // an edge between a solid and an open side (with the region and open unknown space: both
+        // on the grid, the region running on beyond the image)
+        let edge = |p: (i64, i64), q: (i64, i64)| occ(p.0, p.1) != occ(q.0, q.1) && (unreachable || unknown_is_wall || (on_grid(p.0, p.1) && on_grid(q.0, q.1)));
         let res = g.resolution;
         let mut length = 0.0;
         for s in &m.scenario.map.segments {
