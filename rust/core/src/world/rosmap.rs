@@ -412,6 +412,19 @@ impl YamlScan<'_> {
         }
     }
 
+    /// A sequence's entry at the cursor: quoted, or plain (see [`YamlScan::plain`] for `flow`
+    /// and `one_line`).
+    fn item(&mut self, flow: bool, one_line: bool) -> std::result::Result<String, String> {
+        match self.peek() {
+            Some('\'' | '"') => self.quoted(),
+            Some(c) => match scalar_start_error(c, self.peek2()) {
+                Some(e) => Err(e),
+                None => self.plain(flow, one_line),
+            },
+            None => Err("an empty entry".into()),
+        }
+    }
+
     /// A `'single'`- or `"double"`-quoted scalar at the cursor, its escapes (`''`; `\` ones)
     /// resolved and its line breaks folded.
     fn quoted(&mut self) -> std::result::Result<String, String> {
@@ -503,13 +516,7 @@ impl YamlScan<'_> {
                 }
                 Some('[') => return Err("nested sequences are not supported".into()),
                 Some(',') => return Err("an empty item in `[...]`".into()),
-                Some('\'' | '"') => items.push((line, self.quoted()?)),
-                Some(c) => {
-                    if let Some(e) = scalar_start_error(c, self.peek2()) {
-                        return Err(e);
-                    }
-                    items.push((line, self.plain(true, false)?));
-                }
+                Some(_) => items.push((line, self.item(true, false)?)),
             }
             self.skip_space();
             match self.peek() {
@@ -538,13 +545,7 @@ impl YamlScan<'_> {
             match self.peek() {
                 None | Some('\n' | '#') => return Err("an empty `- ` entry".into()),
                 Some('[') => return Err("nested sequences are not supported".into()),
-                Some('\'' | '"') => items.push((line, self.quoted()?)),
-                Some(c) => {
-                    if let Some(e) = scalar_start_error(c, self.peek2()) {
-                        return Err(e);
-                    }
-                    items.push((line, self.plain(false, true)?));
-                }
+                Some(_) => items.push((line, self.item(false, true)?)),
             }
             self.skip_blanks();
             match self.peek() {
