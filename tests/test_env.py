@@ -265,11 +265,16 @@ def test_map_walls_are_simplified_by_default_and_on_request():
 
 def test_defaults_are_the_papers():
     d = shieldnav.ENV_DEFAULTS
-    assert d["semi_axes"] == [0.9, 0.45] and d["gamma"] == 0.9 and d["kappa"] == 8.0 and d["alpha"] == 2.0
+    assert d["semi_axes"] == (0.9, 0.45) and d["gamma"] == 0.9 and d["kappa"] == 8.0 and d["alpha"] == 2.0
     assert d["crop_radius"] == 3.5 and d["safety_distance"] == 0.8 and d["kp"] == 4.0
     assert d["d_view"] == 1.5 and d["gamma_h"] == 0.5 and np.degrees(d["fov_h"]) == pytest.approx(69.4)
     assert d["dt"] == 0.02 and d["lidar_rate_hz"] == 10.0 and d["lidar_columns"] == 1024
     assert d["shield"] == "composite" and d["terminate_on_contact"] is False
+    # one source of truth: the mirror cannot be changed behind the core's back
+    with pytest.raises(TypeError):
+        d["kappa"] = 12.0  # type: ignore[index]
+    with pytest.raises(TypeError):
+        d["v_max"][0] = 0.4  # type: ignore[index]
 
 
 def test_observation_layout():
@@ -342,3 +347,28 @@ def test_corridor_inspection_shielded_never_touches_a_wall(policy):
     for seed in range(20):
         *_, last = rollout("shieldnav/CorridorInspection-v0", seed=seed, policy=policy, steps=1000)
         assert last["summary"]["contact_steps"] == 0, (seed, last["summary"])
+
+
+def test_reset_info_coverage_timing_totals_and_keyword_checks():
+    env = gym.make("shieldnav/DynamicObstacles-v0")
+    _, info = env.reset(seed=0)
+    # the first scan, at reset, already inspects walls: the reset info says so
+    assert info["coverage"] == env.unwrapped.episode.summary()["coverage"] > 0.0
+    _, _, _, _, step = env.step(np.zeros(3, np.float32))
+    assert step["coverage"] >= info["coverage"]
+    # wall-clock entries only with report_timing: two runs with one seed give equal infos
+    totals = []
+    for timing in (False, False, True):
+        e = gym.make("shieldnav/ConstrictedPassage-v0", time_limit=5, report_timing=timing)
+        e.reset(seed=3)
+        for _ in range(5):
+            *_, last = e.step(np.zeros(3, np.float32))
+        totals.append(last["shieldnav_episode"])
+    assert repr(totals[0]) == repr(totals[1]) and "solve_time_mean_ns" not in totals[0]  # (repr: NaN entries)
+    assert totals[2]["solve_time_max_ns"] > 0 and set(totals[2]) - set(totals[0]) == {"solve_time_mean_ns", "solve_time_max_ns"}
+    for kwargs, name in [({"report_timing": "no"}, "report_timing"), ({"seed": 3}, "seed"), ({"preset": 5}, "preset")]:
+        with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`"):
+            shieldnav.CorridorInspectionEnv(**{"preset": "constricted_passage", **kwargs})
+    for name in ("map_path", "scenario_path"):
+        with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`: expected a file path"):
+            shieldnav.CorridorInspectionEnv(**{name: 123})

@@ -190,6 +190,7 @@ def test_bad_renderer_arguments(kw, name):
     ({"semi_axes": (0.0, 0.5)}, "semi_axes"), ({"points": np.zeros((4, 3))}, "points"),
     ({"crop_radius": -1.0}, "crop_radius"), ({"u_nom": np.zeros(3)}, "u_nom"),
     ({"ghost_pose": np.zeros(2)}, "ghost_pose"), ({"text": "one line"}, "text"),
+    ({"contact": "no"}, "contact"), ({"pieces": np.zeros((3, 4)), "inspected": np.array([2.0, 0.0, 1.0])}, "inspected: expected bools"),
 ])
 def test_bad_frame_fields(kw, name):
     with pytest.raises(InvalidArgumentError, match=name):
@@ -307,8 +308,13 @@ def test_human_window_without_a_display_is_an_error(monkeypatch):
     pg = types.SimpleNamespace(display=types.SimpleNamespace(init=lambda: calls.append("init"), get_driver=lambda: "offscreen", quit=lambda: calls.append("quit")))
     monkeypatch.setitem(sys.modules, "pygame", pg)
     monkeypatch.delenv("SDL_VIDEODRIVER", raising=False)
-    with pytest.raises(ShieldnavError, match="needs a display.*rgb_array"):
+    with pytest.raises(ShieldnavError, match=r"needs a display.*rgb_array.*\(shieldnav\.rendering\.save_video\)"):
         HumanWindow(64, 48).show(np.zeros((48, 64, 3), np.uint8))
+    import shieldnav.rendering
+
+    assert callable(shieldnav.rendering.save_video), "the function the message names"
+    # 0/1 integers are bools; a frame takes them
+    assert frame(pieces=np.zeros((2, 4)), inspected=np.array([0, 1])).inspected.tolist() == [False, True]
     assert calls == ["init", "quit"]
     # asked for on purpose, it draws nowhere without complaint
     monkeypatch.setenv("SDL_VIDEODRIVER", "offscreen")

@@ -76,6 +76,23 @@ def test_sb3_adapter_answers_as_dummy_vec_env_does():
     single = gym.make("shieldnav/ConstrictedPassage-v0")
     single.reset(seed=0)
     assert set(single.step(np.zeros(3, np.float32))[4]) <= set(infos[0])
+    # the reset after an ended episode is in reset_infos, as DummyVecEnv keeps it
+    short = ShieldnavVecEnv("shieldnav/ConstrictedPassage-v0", num_envs=2, time_limit=2)
+    short.seed(0)
+    short.reset()
+    first = [dict(r) for r in short.reset_infos]
+    for _ in range(2):
+        short.step_async(np.zeros((2, 3), np.float32))
+        ended = short.step_wait()[3]
+    assert [r["seed"] for r in short.reset_infos] != [r["seed"] for r in first]
+    assert set(short.reset_infos[0]) == {"seed", "coverage", "time", "site"} and ended[0]["time"] > 0.0
+    with pytest.raises(InvalidArgumentError, match="actions"):
+        short.step_async(np.zeros(6, np.float32))  # a flat array is not reshaped silently
+    short.close()
+    with pytest.raises(InvalidArgumentError, match="autoreset_mode"):
+        ShieldnavVecEnv("shieldnav/ConstrictedPassage-v0", num_envs=2, autoreset_mode="next_step")
+    with pytest.raises(InvalidArgumentError, match="not a shieldnav environment"):
+        ShieldnavVecEnv("CartPole-v1", num_envs=2)
     v.set_options({"anything": 1})
     with pytest.raises(InvalidArgumentError, match="options"):
         v.reset()

@@ -144,3 +144,67 @@ def test_bad_arguments_raise():
         v.step(np.zeros((3, 3), np.float32))
     with pytest.raises(InvalidArgumentError, match="action"):
         v.step(np.full((2, 3), 2.0, np.float32))
+
+
+def assert_same_info(native, sync, where):
+    """The same keys, masks and values (Gymnasium's sync layout; `final_obs` stacked here)."""
+    assert set(native) == set(sync), (where, set(native) ^ set(sync))
+    for key, want in sync.items():
+        got = native[key]
+        if isinstance(want, dict):
+            assert_same_info(got, want, f"{where}/{key}")
+        elif key == "final_obs":
+            mask = sync["_final_obs"]
+            assert np.array_equal(got[mask], np.stack(want[mask])), where
+        else:
+            got, want = np.asarray(got), np.asarray(want)
+            kinds = {got.dtype.kind, want.dtype.kind}
+            assert len(kinds) == 1 or kinds == {"i", "u"}, (where, key, got.dtype, want.dtype)
+            assert np.array_equal(got, want, equal_nan=got.dtype.kind == "f"), (where, key, got, want)
+
+
+@pytest.mark.parametrize("mode", ["next_step", "same_step"])
+def test_vector_info_is_laid_out_as_gymnasiums_own_vector_env(mode):
+    # contacts end episodes at different steps: resets at different times, reset infos with
+    # the first scan's coverage, the ended episodes' totals and (same step) final infos
+    kwargs = dict(num_envs=3, time_limit=300, shield="none", terminate_on_contact=True)
+    env_id = "shieldnav/ConstrictedPassage-v0"
+    native = gym.make_vec(env_id, vectorization_mode="vector_entry_point", autoreset_mode=mode, **kwargs)
+    sync = gym.make_vec(env_id, vectorization_mode="sync", vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode(mode.title().replace("_", ""))}, **kwargs)
+    assert_same_info(native.reset(seed=7)[1], sync.reset(seed=7)[1], "reset")
+    rng = np.random.default_rng(0)
+    seen = {"reset_one": False, "ended": 0}
+    for k in range(700):
+        a = rng.uniform(-1, 1, (3, 3)).astype(np.float32)
+        a[:, 0] = np.abs(a[:, 0])  # on, into the doorway's clutter
+        n_obs, n_r, n_te, n_tr, n_info = native.step(a)
+        s_obs, s_r, s_te, s_tr, s_info = sync.step(a)
+        assert n_obs.tobytes() == s_obs.tobytes() and np.array_equal(n_r, s_r), k
+        assert np.array_equal(n_te, s_te) and np.array_equal(n_tr, s_tr), k
+        assert_same_info(n_info, s_info, f"step {k}")
+        seen["reset_one"] |= 0 < int(n_info.get("_seed", np.zeros(3, bool)).sum()) < 3
+        seen["ended"] += int((n_te | n_tr).sum())
+    assert seen["reset_one"] and seen["ended"] >= 6, seen
+    native.close()
+    sync.close()
+
+
+def test_bad_vector_arguments_name_what_is_wrong():
+    make = lambda **kw: CorridorInspectionVectorEnv(kw.pop("n", 2), preset="constricted_passage", **kw)  # noqa: E731
+    for kwargs, name in [({"threads": -1}, "threads"), ({"threads": 2.5}, "threads"), ({"max_episode_steps": 0}, "max_episode_steps"),
+                         ({"time_limit": True}, "time_limit"), ({"report_timing": "no"}, "report_timing"), ({"seed": 3}, "seed"),
+                         ({"n": True}, "num_envs"), ({"autoreset_mode": gym.vector.AutoresetMode.DISABLED}, "autoreset_mode")]:
+        with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`"):
+            make(**kwargs)
+    # numpy integers and Gymnasium's own mode values are what they say
+    v = make(n=np.int64(2), autoreset_mode="SameStep", threads=np.int32(1))
+    assert v.num_envs == 2 and v.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    a, _ = v.reset(seed=np.int64(4))
+    b, _ = v.reset(seed=[4, 5])
+    assert np.array_equal(a, b)
+    for seed, name in [("123", "seed"), ([1.9, 2.2], r"seed\[0\]"), ([True, 2], r"seed\[0\]"), ([3, -1], r"seed\[1\]"), (-1, "seed"), (1.5, "seed")]:
+        with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`"):
+            v.reset(seed=seed)
+    v.close()
+    with pytest.raises(gym.error.ClosedEnvironmentError):
+        v.summary(0)

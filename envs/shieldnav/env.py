@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import os
-from typing import Any
+from types import MappingProxyType
+from typing import Any, Mapping
 
 import gymnasium as gym
 import numpy as np
@@ -12,8 +13,9 @@ from gymnasium import spaces
 from shieldnav._core import Episode, episode_defaults
 from shieldnav.exceptions import InvalidArgumentError
 
-#: Every configuration keyword of the environments with its default (the paper's values).
-ENV_DEFAULTS: dict[str, Any] = episode_defaults()
+#: Every configuration keyword of the environments with its default (the paper's values;
+#: read-only, vectors as tuples).
+ENV_DEFAULTS: Mapping[str, Any] = MappingProxyType({k: tuple(v) if isinstance(v, list) else v for k, v in episode_defaults().items()})
 
 _OBSERVATIONS = ("flat", "dict")
 #: Bound (m) of odometry quantities in the observation spaces: far beyond any site (walls lie
@@ -26,11 +28,33 @@ def site_args(preset: str | None, procedural: bool, map_path: Any, scenario_path
     checked as the environments name them."""
     if not isinstance(procedural, (bool, np.bool_)):
         raise InvalidArgumentError(f"invalid `procedural`: expected True or False, got {procedural!r}")
+    if preset is not None and not isinstance(preset, str):
+        raise InvalidArgumentError(f"invalid `preset`: expected a preset name (str), got {preset!r}")
+    for name, value in (("map_path", map_path), ("scenario_path", scenario_path)):
+        if value is not None and not isinstance(value, (str, os.PathLike)):
+            raise InvalidArgumentError(f"invalid `{name}`: expected a file path (str or os.PathLike), got {value!r}")
     given = [k for k, v in (("preset", preset), ("procedural=True", procedural or None), ("map_path", map_path), ("scenario_path", scenario_path)) if v is not None]
     if len(given) != 1:
         raise InvalidArgumentError(f"invalid site: give exactly one of preset, procedural=True, map_path, scenario_path (got {', '.join(given) or 'none'})")
     path = lambda p: None if p is None else os.path.expanduser(p)  # noqa: E731
     return dict(preset=preset, procedural=bool(procedural), ros_map=path(map_path), scenario=path(scenario_path))
+
+
+def check_flag(name: str, value: Any) -> bool:
+    """``value`` if it is a bool, else an error naming ``name``."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidArgumentError(f"invalid `{name}`: expected True or False, got {value!r}")
+    return bool(value)
+
+
+#: The wall-clock entries of an episode's totals (shown with ``report_timing`` only).
+TIMING_TOTALS = ("solve_time_mean_ns", "solve_time_max_ns")
+
+
+def episode_totals(summary: dict[str, Any], report_timing: bool) -> dict[str, Any]:
+    """An episode's totals as ``info["shieldnav_episode"]`` gives them: without the wall-clock
+    entries unless ``report_timing``."""
+    return summary if report_timing else {k: v for k, v in summary.items() if k not in TIMING_TOTALS}
 
 
 class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
@@ -98,9 +122,10 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
     ## Arguments
     ``preset`` / ``procedural`` / ``map_path`` / ``scenario_path``: the site (exactly one).
     ``observation``: ``"flat"`` or ``"dict"``. ``render_mode``: ``"rgb_array"`` or ``"human"``.
-    ``report_timing``: put the shield's wall time in ``info["solve_time_ns"]`` (off by
-    default: it is the one entry of ``info`` that differs between two runs with the same seed,
-    and Gymnasium's checker asks for equal ones; the benchmark turns it on).
+    ``report_timing``: put the shield's wall time in ``info["solve_time_ns"]`` and its mean and
+    maximum in ``info["shieldnav_episode"]`` (``solve_time_mean_ns``, ``solve_time_max_ns``;
+    off by default: they are the only entries of ``info`` that differ between two runs with the
+    same seed, and Gymnasium's checker asks for equal ones; the benchmark turns it on). A bool.
     Every other keyword is a configuration key of ``ENV_DEFAULTS`` (shield, its parameters,
     robot, tracker, LIDAR, rates, reward weights, coverage, deadlock), e.g.
     ``gymnasium.make("shieldnav/ConstrictedPassage-v0", shield="distance", kappa=12)``.
@@ -132,11 +157,13 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
             raise InvalidArgumentError(
                 f"invalid `render_mode`: expected one of {self.metadata['render_modes']} or None, got {render_mode!r}"
             )
+        if "seed" in config:
+            raise InvalidArgumentError("invalid `seed`: not an environment keyword; seed the episodes with reset(seed=...)")
         self._site = site_args(preset, procedural, map_path, scenario_path)
         self._episode = Episode(**self._site, seed=0, **config)
         self.config = {**ENV_DEFAULTS, **config}
         self.observation_mode = observation
-        self._report_timing = bool(report_timing)
+        self._report_timing = check_flag("report_timing", report_timing)
         self.render_mode = render_mode
         # frames at the control rate (human mode shows every step; video tools read this)
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / float(self.config["dt"])}
@@ -195,7 +222,9 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         return {"flat": flat, "points": points, "valid": valid, "pose": np.array(self._episode.estimated_pose)}
 
     def _info(self) -> dict[str, Any]:
-        return {"coverage": 0.0, "time": 0.0, "seed": self._episode_seed, "site": self._episode.name}
+        # (the first scan, at reset, may already inspect walls)
+        summary = self._episode.summary()
+        return {"coverage": summary["coverage"], "time": summary["time"], "seed": self._episode_seed, "site": self._episode.name}
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
         super().reset(seed=seed)
@@ -213,7 +242,7 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         if not self._report_timing:
             del info["solve_time_ns"]
         if terminated or truncated:
-            info["shieldnav_episode"] = self._episode.summary()
+            info["shieldnav_episode"] = episode_totals(self._episode.summary(), self._report_timing)
         if self.render_mode == "human":
             self.render()
         return self._obs(flat), reward, terminated, truncated, info

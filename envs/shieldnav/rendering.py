@@ -68,8 +68,9 @@ def _positive(name, value, allow_zero=False, kind=numbers.Real):
 class RenderFrame:
     """Everything drawn in one image, in the world frame (metres, radians).
 
-    Fields are converted (arrays to float64, ``inspected`` to bool) and validated on
-    construction; a malformed one raises :class:`InvalidArgumentError` naming it.
+    Fields are converted (arrays to float64, ``inspected`` from bools or 0/1 integers to bool)
+    and validated on construction (``contact`` must be a bool); a malformed one raises
+    :class:`InvalidArgumentError` naming it.
     """
 
     walls: np.ndarray                   # (M, 4) static wall segments [ax, ay, bx, by]
@@ -95,7 +96,10 @@ class RenderFrame:
                             ("u_star", (2,)), ("reference", (3,)), ("ghost_pose", (3,))):
             if getattr(self, name) is not None or name not in ("reference", "ghost_pose"):
                 fix(name, _arr(name, getattr(self, name), shape))
-        fix("inspected", _arr("inspected", self.inspected, (len(self.pieces),), bool))
+        inspected = _arr("inspected", self.inspected, (len(self.pieces),), None)
+        if inspected.dtype != bool and not (inspected.dtype.kind in "iu" and np.isin(inspected, (0, 1)).all()):
+            raise InvalidArgumentError(f"inspected: expected bools (or 0/1), got {inspected.dtype} values")
+        fix("inspected", inspected.astype(bool))
         for name in ("footprint", "semi_axes"):
             if getattr(self, name) is not None or name == "footprint":
                 v = _arr(name, getattr(self, name), (2,)).tolist()
@@ -105,6 +109,8 @@ class RenderFrame:
         if isinstance(self.text, str):
             raise InvalidArgumentError("text: expected a sequence of lines, got one str")
         fix("text", tuple(str(t) for t in self.text))
+        if not isinstance(self.contact, (bool, np.bool_)):
+            raise InvalidArgumentError(f"contact: expected True or False, got {self.contact!r}")
         fix("contact", bool(self.contact))
 
 
@@ -320,7 +326,7 @@ class HumanWindow:
             driver = pygame.display.get_driver()
             if driver in ("offscreen", "dummy") and os.environ.get("SDL_VIDEODRIVER") != driver:
                 pygame.display.quit()
-                raise ShieldnavError(f"render_mode='human' needs a display (SDL found none and chose {driver!r}); use render_mode='rgb_array' and save the frames (shieldnav.save_video), or set SDL_VIDEODRIVER={driver} to draw nowhere on purpose")
+                raise ShieldnavError(f"render_mode='human' needs a display (SDL found none and chose {driver!r}); use render_mode='rgb_array' and save the frames (shieldnav.rendering.save_video), or set SDL_VIDEODRIVER={driver} to draw nowhere on purpose")
             self._pg, self._clock = pygame, pygame.time.Clock()
             self._screen = pygame.display.set_mode((self.width, self.height))
             pygame.display.set_caption("shieldnav")

@@ -38,6 +38,10 @@ class ShieldnavVecEnv(VecEnv):
 
     def __init__(self, env_id: str, num_envs: int = 1, threads: int | None = None, **kwargs: Any) -> None:
         spec = gym.spec(env_id)
+        if spec.vector_entry_point != "shieldnav.vector:make_vector":
+            raise InvalidArgumentError(f"invalid `env_id`: {env_id!r} is not a shieldnav environment (ids: shieldnav.ENV_IDS)")
+        if "autoreset_mode" in kwargs:
+            raise InvalidArgumentError("invalid `autoreset_mode`: ShieldnavVecEnv resets as SB3's VecEnvs do (same step)")
         merged = {**spec.kwargs, **kwargs}
         merged.setdefault("max_episode_steps", spec.max_episode_steps)
         self.vec = CorridorInspectionVectorEnv(num_envs, autoreset_mode="same_step", threads=threads, **merged)
@@ -51,12 +55,19 @@ class ShieldnavVecEnv(VecEnv):
             raise InvalidArgumentError(f"invalid `options`: ShieldnavVecEnv's reset takes none, got {options}")
         seeds = None if self._seeds[0] is None else [int(s) for s in self._seeds]
         obs, info = self.vec.reset(seed=seeds)
-        self.reset_infos = [{k: info[k][i].item() for k in ("seed", "coverage", "time")} for i in range(self.num_envs)]
+        self.reset_infos = [self._reset_info(info, i) for i in range(self.num_envs)]
         self._reset_seeds()
         return obs
 
+    @staticmethod
+    def _reset_info(info: dict[str, Any], i: int) -> dict[str, Any]:
+        return {k: info[k][i].item() if isinstance(info[k][i], np.generic) else info[k][i] for k in ("seed", "coverage", "time", "site")}
+
     def step_async(self, actions: np.ndarray) -> None:
-        self._actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
+        actions = np.asarray(actions)
+        if actions.shape != (self.num_envs, *self.action_space.shape):
+            raise InvalidArgumentError(f"invalid `actions`: expected shape {(self.num_envs, *self.action_space.shape)}, got {actions.shape}")
+        self._actions = actions
 
     def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
         assert self._actions is not None, "step_async first"
@@ -64,12 +75,15 @@ class ShieldnavVecEnv(VecEnv):
         dones = terminated | truncated
         infos: list[dict[str, Any]] = []
         for i in range(self.num_envs):
-            # (every per-step entry, as a single environment reports it)
-            d = {k: v[i] for k, v in info.items() if not k.startswith("_") and isinstance(v, np.ndarray) and k != "final_obs"}
+            # (every per-step entry, as a single environment reports it: an ended episode's
+            # last step is in `final_info`, and the info of the reset after it in `reset_infos`)
+            step = info["final_info"] if dones[i] else info
+            d = {k: v[i] for k, v in step.items() if not k.startswith("_") and isinstance(v, np.ndarray) and k not in ("final_obs", "seed", "site")}
             if dones[i]:
                 d["terminal_observation"] = info["final_obs"][i]
                 d["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
-                d["shieldnav_episode"] = {k: v[i].item() for k, v in info["shieldnav_episode"].items()}
+                d["shieldnav_episode"] = {k: v[i].item() for k, v in step["shieldnav_episode"].items() if not k.startswith("_")}
+                self.reset_infos[i] = self._reset_info(info, i)
             infos.append(d)
         return obs, reward.astype(np.float32), dones, infos
 

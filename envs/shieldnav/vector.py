@@ -9,6 +9,7 @@ same order, so a batch of N gives the results of N single environments bit for b
 
 from __future__ import annotations
 
+import numbers
 import os
 from typing import Any
 
@@ -18,10 +19,34 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from shieldnav._core import Batch
-from shieldnav.env import CorridorInspectionEnv, site_args
+from shieldnav.env import CorridorInspectionEnv, check_flag, episode_totals, site_args
 from shieldnav.exceptions import InvalidArgumentError
 
 _MODES = {"next_step": AutoresetMode.NEXT_STEP, "same_step": AutoresetMode.SAME_STEP}
+#: The reset info's keys (the single environment's).
+_RESET_KEYS = ("coverage", "time", "seed", "site")
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
+
+
+def _count(name: str, value: Any, optional: bool = True) -> int | None:
+    """``value`` as a positive int (or None if ``optional``), else an error naming ``name``."""
+    if value is None and optional:
+        return None
+    if not _is_int(value) or value < 1:
+        raise InvalidArgumentError(f"invalid `{name}`: must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def _mode(value: Any) -> str:
+    """An autoreset mode (ours, Gymnasium's ``AutoresetMode`` or its value) as our name."""
+    names = {**{m: m for m in _MODES}, **{v.value: k for k, v in _MODES.items()}}
+    key = value.value if isinstance(value, AutoresetMode) else value
+    if not isinstance(key, str) or key not in names:
+        raise InvalidArgumentError(f"invalid `autoreset_mode`: expected one of {sorted(names)} or their AutoresetMode, got {value!r}")
+    return names[key]
 
 
 class EpisodeSeeds:
@@ -49,23 +74,29 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
 
     Arguments are those of the single environment (site, configuration keys) plus
     ``num_envs``, ``autoreset_mode`` (``"next_step"``, Gymnasium's default, or
-    ``"same_step"``, or the ``gymnasium.vector.AutoresetMode`` of either), ``threads`` (worker
+    ``"same_step"``, or the ``gymnasium.vector.AutoresetMode`` of either or its value), ``threads`` (worker
     threads; default: the usable cores) and ``max_episode_steps``. Episodes end at the smaller
     of ``max_episode_steps`` and ``time_limit`` (applied in Rust), as a single environment's
     do under Gymnasium's ``TimeLimit``: either one shortens them. Only the flat observation.
 
-    ``info`` holds one array per key (``cost``, ``clearance``, ``H``, ``h_min``, ...) with its
-    ``_key`` mask, and ``shieldnav_episode`` (the episode totals of sub-environments whose
-    episode ended, masked by ``_shieldnav_episode``). In ``"same_step"`` mode
-    ``info["final_obs"]`` holds the last observation of those episodes and
-    ``info["final_info"]`` (masked by ``_final_info``) their last step's info with the totals.
+    ``info`` is laid out as Gymnasium's own vector environments lay out the single
+    environment's: one array per key (``cost``, ``clearance``, ``H``, ``h_min``, ...) with its
+    ``_key`` mask of the sub-environments that stepped; ``shieldnav_episode`` (a dict of arrays
+    with their masks: the totals of episodes that ended, as the single environment's last
+    ``info`` holds them); and for sub-environments reset in this call the single environment's
+    reset info (``coverage``, ``time``, ``seed``, ``site``). In ``"next_step"`` mode an ended
+    episode's sub-environment resets in the next call. In ``"same_step"`` mode it resets in the
+    same call: its entries of ``obs`` and ``info`` are the new episode's, ``info["final_obs"]``
+    ((N, L), masked by ``_final_obs``) holds the last observation of the ended ones and
+    ``info["final_info"]`` (masked by ``_final_info``) their last step's info with
+    ``shieldnav_episode``. A batch step either steps every sub-environment or, on a bad
+    action, none.
 
     ``reset(seed=...)``: an int (sub-environment ``i`` gets ``seed + i``), a list (``None``
     entries draw a seed from the vector's generator), or ``None`` (every sub-environment gets a
     seed from that generator: deterministic after a seeded reset, but not what ``N`` single
-    environments continuing their own generators would draw). Its info is the single
-    environment's reset info (``seed``, the episode's own; ``coverage``; ``time``) per
-    sub-environment.
+    environments continuing their own generators would draw). Seeds are non-negative integers.
+    Its info is the single environment's reset info per sub-environment.
     """
 
     def __init__(
@@ -85,12 +116,13 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         report_timing: bool = False,
         **config: Any,
     ) -> None:
-        if not isinstance(num_envs, int) or num_envs < 1:
-            raise InvalidArgumentError(f"invalid `num_envs`: must be a positive integer, got {num_envs!r}")
-        if isinstance(autoreset_mode, AutoresetMode):
-            autoreset_mode = {v: k for k, v in _MODES.items()}.get(autoreset_mode, autoreset_mode.value)
-        if autoreset_mode not in _MODES:
-            raise InvalidArgumentError(f"invalid `autoreset_mode`: expected one of {sorted(_MODES)} (or their AutoresetMode), got {autoreset_mode!r}")
+        num_envs = _count("num_envs", num_envs, optional=False)  # type: ignore[assignment]
+        autoreset_mode = _mode(autoreset_mode)
+        threads = _count("threads", threads)
+        max_episode_steps, time_limit = _count("max_episode_steps", max_episode_steps), _count("time_limit", time_limit)
+        report_timing = check_flag("report_timing", report_timing)
+        if "seed" in config:
+            raise InvalidArgumentError("invalid `seed`: not an environment keyword; seed the episodes with reset(seed=...)")
         if observation != "flat":
             raise InvalidArgumentError("invalid `observation`: the vector environment serves the flat observation only")
         if render_mode is not None:
@@ -116,36 +148,48 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         self._mode = autoreset_mode
         single.close()
 
-    def reset(self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         self._check_open()
-        first = seed if seed is None or isinstance(seed, int) else next((int(s) for s in seed if s is not None), None)
+        given = self._seed_list(seed)
+        first = next((s for s in given if s is not None), None) if isinstance(given, list) else None
         super().reset(seed=first)
         if options:
             raise InvalidArgumentError(f"invalid `options`: reset takes no options, got {sorted(options)}")
-        if seed is None:
+        if given is None:
             seeds = [int(s) for s in self.np_random.integers(0, 2**31, self.num_envs)]
-        elif isinstance(seed, int):
-            seeds = [seed + i for i in range(self.num_envs)]
         else:
-            if len(seed) != self.num_envs:
-                raise InvalidArgumentError(f"invalid `seed`: expected {self.num_envs} seeds, got {len(seed)}")
-            seeds = [int(s) if s is not None else int(self.np_random.integers(0, 2**31)) for s in seed]
+            seeds = [s if s is not None else int(self.np_random.integers(0, 2**31)) for s in given]
         first = self._seeds.reseed(seeds)
         obs = self._batch.reset(first)
         self._next = self._seeds.draw(np.ones(self.num_envs, bool))
-        # the single environment's reset info, one array per key with its mask
         every = np.ones(self.num_envs, bool)
-        zeros = np.zeros(self.num_envs)
-        info = {"seed": first.astype(np.uint64), "coverage": zeros, "time": zeros.copy()}
-        return obs, {**info, **{"_" + k: every for k in info}}
+        return obs, self._reset_info({}, every, first)
+
+    def _seed_list(self, seed: Any) -> list[int | None] | None:
+        """``reset``'s ``seed`` as one entry per sub-environment (None: drawn), or None."""
+        if seed is None:
+            return None
+        if _is_int(seed):
+            if seed < 0:
+                raise InvalidArgumentError(f"invalid `seed`: must be a non-negative integer, got {seed!r}")
+            return [int(seed) + i for i in range(self.num_envs)]
+        if isinstance(seed, (str, bytes)) or not hasattr(seed, "__len__"):
+            raise InvalidArgumentError(f"invalid `seed`: expected an int, a list of {self.num_envs} ints (or None) or None, got {seed!r}")
+        if len(seed) != self.num_envs:
+            raise InvalidArgumentError(f"invalid `seed`: expected {self.num_envs} seeds, got {len(seed)}")
+        for i, s in enumerate(seed):
+            if s is not None and not (_is_int(s) and s >= 0):
+                raise InvalidArgumentError(f"invalid `seed[{i}]`: expected a non-negative integer or None, got {s!r}")
+        return [None if s is None else int(s) for s in seed]
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         # every sub-environment that may reset in this call gets its next seed; only those
         # that do reset consume it, exactly as a single environment would
         self._check_open()
-        obs, reward, terminated, truncated, raw, final_obs, reset = self._batch.step(np.asarray(actions), self._next)
+        used = self._next
+        obs, reward, terminated, truncated, raw, final_obs, reset = self._batch.step(np.asarray(actions), used)
         self._consume(reset)
-        info = self._info(raw, reset, final_obs)
+        info = self._info(raw, reset, final_obs, used)
         return obs, reward, terminated, truncated, info
 
     def _consume(self, reset: np.ndarray) -> None:
@@ -153,27 +197,64 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
             fresh = self._seeds.draw(reset)
             self._next = np.where(reset, fresh, self._next)
 
-    def _info(self, raw: dict[str, Any], reset: np.ndarray, final_obs: np.ndarray) -> dict[str, Any]:
+    def _reset_info(self, info: dict[str, Any], mask: np.ndarray, seeds: np.ndarray) -> dict[str, Any]:
+        """``info`` with the single environment's reset info of the sub-environments in
+        ``mask`` (reset with ``seeds``), as Gymnasium's vector environments add it."""
+        n = self.num_envs
+        values = {"coverage": np.zeros(n), "time": np.zeros(n), "seed": np.zeros(n, np.int64), "site": np.full(n, None, object)}
+        for i in np.flatnonzero(mask):
+            totals = self._batch.summary(int(i))
+            values["coverage"][i], values["time"][i] = totals["coverage"], totals["time"]
+            values["seed"][i], values["site"][i] = int(seeds[i]), self._batch.site_name(int(i))
+        for key in _RESET_KEYS:
+            if key in info:
+                info[key][mask] = values[key][mask]
+                info["_" + key] = info["_" + key] | mask
+            else:
+                info[key], info["_" + key] = values[key], mask.copy()
+        return info
+
+    def _info(self, raw: dict[str, Any], reset: np.ndarray, final_obs: np.ndarray, seeds: np.ndarray) -> dict[str, Any]:
+        # laid out as Gymnasium's own vector environments lay out the single environments'
+        # infos: a step's entries for the sub-environments that stepped (masked), the reset
+        # info for those that reset in this call, and in same-step mode the ended episodes'
+        # last step in `final_info`
+        n = self.num_envs
         ended = raw.pop("ended")
         if not self._report_timing:
             del raw["solve_time_ns"]
-        stepped = ~reset if self._mode == "next_step" else np.ones(self.num_envs, bool)
-        info: dict[str, Any] = {}
-        for key, value in raw.items():
-            info[key] = value
-            info["_" + key] = stepped
+        done = np.zeros(n, bool)
+        done[list(ended)] = True
+        stepped = ~reset if self._mode == "next_step" else ~done
+        step_info: dict[str, Any] = dict(raw)
         if ended:
-            keys = next(iter(ended.values())).keys()
-            mask = np.zeros(self.num_envs, bool)
-            mask[list(ended)] = True
-            info["shieldnav_episode"] = {k: np.array([ended[i][k] if i in ended else 0 for i in range(self.num_envs)]) for k in keys}
-            info["_shieldnav_episode"] = mask
-            if self._mode == "same_step":
-                info["final_obs"] = final_obs
-                info["_final_obs"] = mask
-                # (Gymnasium's same-step contract: the ended episodes' last step info)
-                info["final_info"] = {k: v for k, v in info.items() if k not in ("final_obs", "_final_obs")}
-                info["_final_info"] = mask
+            first = episode_totals(next(iter(ended.values())), self._report_timing)
+            totals: dict[str, Any] = {}
+            for key, value in first.items():
+                totals[key] = np.zeros(n, np.asarray(value).dtype)
+                for i, e in ended.items():
+                    totals[key][i] = e[key]
+                totals["_" + key] = done
+            step_info["shieldnav_episode"] = totals
+        if self._mode == "same_step" and ended:
+            final = {k: (v.copy() if k != "shieldnav_episode" else v) for k, v in step_info.items()}
+            for key, value in raw.items():
+                final[key][~done] = 0
+                final["_" + key] = done
+            final["_shieldnav_episode"] = done
+            step_info.pop("shieldnav_episode")
+        info: dict[str, Any] = {}
+        for key, value in step_info.items():
+            if key == "shieldnav_episode":
+                info[key], info["_" + key] = value, done
+            elif stepped.any():
+                value[~stepped] = 0
+                info[key], info["_" + key] = value, stepped
+        if self._mode == "same_step" and ended:
+            info["final_obs"], info["_final_obs"] = final_obs, done
+            info["final_info"], info["_final_info"] = final, done
+        if reset.any():
+            self._reset_info(info, reset, seeds)
         return info
 
     def _check_open(self) -> None:
@@ -182,6 +263,7 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
 
     def summary(self, i: int) -> dict[str, Any]:
         """Totals of sub-environment ``i``'s current episode."""
+        self._check_open()
         return self._batch.summary(i)
 
     def close_extras(self, **kwargs: Any) -> None:

@@ -147,6 +147,12 @@ impl PyBatch {
         summary_dict(py, ep.summary())
     }
 
+    /// The scenario's name in episode `i` (a procedural site's changes with each episode).
+    fn site_name(&self, i: usize) -> PyResult<String> {
+        let ep = self.inner.episodes().get(i).ok_or_else(|| invalid("i", format!("must be < {}", self.inner.len())))?;
+        Ok(ep.world().scenario().name.clone())
+    }
+
     /// Number of episodes.
     fn __len__(&self) -> usize {
         self.inner.len()
