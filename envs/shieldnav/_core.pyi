@@ -137,6 +137,11 @@ class World:
 
     `ranges`, `points`, the poses and `contacts` are live read-only views of the world's own
     buffers (no copy); they follow the world as it steps, `.copy()` keeps one.
+
+    Scans are taken at control steps (the first step at or after each is due; `scan_time`
+    reports when): `rate_hz` above the control rate `1 / dt` is an `InvalidArgumentError`
+    naming `rate_hz` and `dt`. `channels`, `columns`, `seed`, `mount` and `vertical_fov` of
+    the wrong type, sign or length are `InvalidArgumentError`s naming them.
     """
 
     def __new__(
@@ -191,7 +196,13 @@ _Pose3 = tuple[float, float, float]
 
 @final
 class Episode:
-    """One corridor-inspection episode in Rust: world, shield, coverage, reward, metrics."""
+    """One corridor-inspection episode in Rust: world, shield, coverage, reward, metrics.
+
+    `step` and `observe` release the GIL. An action is three real numbers: bool or complex
+    ones (arrays of those dtypes included) are refused, as are bools for the numeric
+    configuration keys (`gamma=True`); a seed that is not an integer from 0 to 2**64 - 1 is an
+    `InvalidArgumentError` naming `seed`.
+    """
 
     def __new__(
         cls,
@@ -236,7 +247,12 @@ def episode_defaults() -> dict[str, Any]: ...
 
 @final
 class Batch:
-    """N corridor-inspection episodes stepped together in Rust."""
+    """N corridor-inspection episodes stepped together in Rust.
+
+    `step` checks every row of `actions` it will step (not those of episodes about to reset)
+    before stepping any: a bad row is an `InvalidArgumentError` naming it (`actions[2]`) and
+    no episode moves. Bool or complex `actions` are refused.
+    """
 
     def __new__(
         cls,

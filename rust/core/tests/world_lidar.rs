@@ -3,11 +3,18 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shieldnav_core::sensors::{Lidar, LidarConfig, LidarMount, Scan};
-use shieldnav_core::world::{preset, Pose2, Segment, PRESET_NAMES};
+use shieldnav_core::world::{preset, Polygon, Pose2, Segment, PRESET_NAMES};
 
 /// Brute force in the world frame: every beam against every wall, Cramer's rule on
 /// `o + t·d = a + s·(b − a)`, then the height window of the beam's elevation.
 fn reference(walls: &[Segment], cfg: &LidarConfig, body: Pose2) -> Vec<f64> {
+    reference_with_tops(walls, &[], cfg, body)
+}
+
+/// [`reference`] with the top faces of the solid polygons `solids` (whose edges are among
+/// `walls`): a descending beam hits the plane `z = height` at horizontal distance
+/// `(height − z) / tan(el)`, a hit where that point is inside the polygon.
+fn reference_with_tops(walls: &[Segment], solids: &[Polygon], cfg: &LidarConfig, body: Pose2) -> Vec<f64> {
     let m = cfg.mount;
     let (sy, cy) = body.yaw.sin_cos();
     let o = [body.x + cy * m.x - sy * m.y, body.y + sy * m.x + cy * m.y];
@@ -41,6 +48,12 @@ fn reference(walls: &[Segment], cfg: &LidarConfig, body: Pose2) -> Vec<f64> {
                     continue;
                 }
                 best = best.min(t / el.cos());
+            }
+            for p in solids {
+                let t = (p.height - m.z) / el.tan();
+                if el.tan() < 0.0 && t >= 0.0 && p.contains([o[0] + t * d[0], o[1] + t * d[1]]) {
+                    best = best.min(t / el.cos());
+                }
             }
             out[k * cfg.columns + i] = if best >= cfg.min_range && best <= cfg.max_range { best } else { f64::INFINITY };
         }
@@ -401,3 +414,102 @@ fn one_sided_grid_walls_give_the_two_sided_reference_ranges_in_free_space() {
     }
 }
 
+
+/// A 3D scan looks down on solid furniture: a 0.8 m box at x 3–6, y ±1 before a wall at
+/// x = 10, scanned from z = 1.0 by 16 channels over ±0.2 rad. The channel passing over the
+/// box's front face at z = 0.88 hits its top (5.0 m), not the wall behind it (10.008 m, as
+/// when the box's back faces were skipped and it had no top). Every beam matches the
+/// brute-force caster with top faces, through every scan path, and with the box as a
+/// moving obstacle.
+#[test]
+fn three_d_scan_hits_the_tops_of_solids() {
+    use shieldnav_core::world::{MovingObstacle, SegmentIndex, Trajectory};
+    let boxed = Polygon::rect(3.0, -1.0, 6.0, 1.0, 0.8);
+    let far = Segment::new([10.0, -5.0], [10.0, 5.0], 2.0);
+    let mut walls: Vec<Segment> = boxed.edges().collect();
+    walls.push(far);
+    let cfg = LidarConfig { vertical_fov: (-0.2, 0.2), mount: LidarMount { x: 0.0, y: 0.0, z: 1.0, yaw: 0.0 }, ..exact(16, 1024) };
+    let mut lidar = Lidar::new(cfg).unwrap();
+    let mut scan = Scan::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let pose = Pose2::default();
+    lidar.scan_into(&[&walls], pose, 0.0, &mut rng, &mut scan).unwrap();
+    // channel 6 looks down at −0.04 rad: z = 0.88 over the front face, 0.8 at x ≈ 5.0
+    let el: f64 = -0.2 + 6.0 * 0.4 / 15.0;
+    assert!((1.0 + 3.0 * el.tan() - 0.88).abs() < 1e-3);
+    let r = scan.ranges[6 * 1024];
+    let want = (0.8 - 1.0) / el.tan() / el.cos();
+    assert!((r - want).abs() < 1e-9 && r < 5.1, "channel 6 column 0: {r}, the box's top at {want}");
+    let check = |got: &Scan, what: &str| {
+        let want = reference_with_tops(&walls, std::slice::from_ref(&boxed), &cfg, pose);
+        let mut tops = 0;
+        for (j, (a, b)) in got.ranges.iter().zip(&want).enumerate() {
+            assert!(a == b || (a - b).abs() <= 1e-6, "{what}: beam {j}: {a} vs reference {b}");
+            tops += (a.is_finite() && (j / 1024) < 8 && *a < 6.1 && *a > 3.0 / (-0.2f64).cos() && (j % 1024 < 100 || j % 1024 > 924)) as usize;
+        }
+        assert!(tops > 100, "{what}: {tops} returns from the top");
+    };
+    check(&scan, "full sweep");
+    // through the bucket index
+    let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+    let mut b = Scan::default();
+    lidar.scan_indexed_into(&index, &[], pose, 0.0, &mut rng, &mut b).unwrap();
+    check(&b, "indexed");
+    // the box as a moving obstacle, clockwise in its own frame
+    let mut shape = Polygon::rect(-1.5, -1.0, 1.5, 1.0, 0.8);
+    shape.vertices.reverse();
+    let mover = MovingObstacle { name: "box".into(), shape, trajectory: Trajectory::fixed(Pose2::new(4.5, 0.0, 0.0)) };
+    let mut moving = Vec::new();
+    mover.segments_at(0.0, &mut moving);
+    let index = SegmentIndex::new(vec![far], 2.0).unwrap();
+    let mut c = Scan::default();
+    lidar.scan_into(&[&[far], &moving], pose, 0.0, &mut rng, &mut c).unwrap();
+    check(&c, "moving, full sweep");
+    lidar.scan_indexed_into(&index, &moving, pose, 0.0, &mut rng, &mut c).unwrap();
+    check(&c, "moving, indexed");
+    // and a planar ring at the same height passes over the box as before
+    let mut planar = Lidar::new(LidarConfig { mount: cfg.mount, ..exact(1, 1024) }).unwrap();
+    planar.scan_into(&[&walls], pose, 0.0, &mut rng, &mut scan).unwrap();
+    assert_eq!(scan.ranges[0], 10.0);
+}
+
+/// Random solid boxes below the sensor and random poses: the 3D scan equals the brute-force
+/// caster with top faces, and the indexed scan the full sweep bit for bit.
+#[test]
+fn random_low_solids_match_brute_force_with_tops() {
+    use shieldnav_core::world::SegmentIndex;
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    for _ in 0..6 {
+        let mut walls = vec![
+            Segment::new([-12.0, -12.0], [12.0, -12.0], 2.5),
+            Segment::new([12.0, -12.0], [12.0, 12.0], 2.5),
+            Segment::new([12.0, 12.0], [-12.0, 12.0], 2.5),
+            Segment::new([-12.0, 12.0], [-12.0, -12.0], 2.5),
+        ];
+        let mut solids = Vec::new();
+        while solids.len() < 12 {
+            let c: [f64; 2] = [rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)];
+            if c[0].hypot(c[1]) < 4.0 {
+                continue;
+            }
+            let mut p = Polygon::oriented_box(Pose2::new(c[0], c[1], rng.random_range(-3.0..3.0)), rng.random_range(0.3..2.0), rng.random_range(0.3..2.0), rng.random_range(0.2..1.1));
+            if rng.random_bool(0.5) {
+                p.vertices.reverse();
+            }
+            walls.extend(p.edges());
+            solids.push(p);
+        }
+        let pose = Pose2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-3.0..3.0));
+        let cfg = LidarConfig { vertical_fov: (-0.6, 0.2), mount: LidarMount { x: 0.2, y: 0.1, z: 1.2, yaw: 0.3 }, ..exact(32, 1024) };
+        let mut lidar = Lidar::new(cfg).unwrap();
+        let (mut a, mut b) = (Scan::default(), Scan::default());
+        lidar.scan_into(&[&walls], pose, 0.0, &mut rng, &mut a).unwrap();
+        let want = reference_with_tops(&walls, &solids, &cfg, pose);
+        for (j, (x, y)) in a.ranges.iter().zip(&want).enumerate() {
+            assert!(x == y || (x - y).abs() <= 1e-6, "beam {j}: {x} vs reference {y}");
+        }
+        let index = SegmentIndex::new(walls.clone(), 2.0).unwrap();
+        lidar.scan_indexed_into(&index, &[], pose, 0.0, &mut rng, &mut b).unwrap();
+        assert_eq!(a.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>(), b.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>());
+    }
+}

@@ -36,7 +36,7 @@ impl PyBatch {
     #[new]
     #[pyo3(signature = (num_envs, seeds, *, preset=None, procedural=false, ros_map=None, scenario=None, autoreset_mode="next_step", threads=2, **kwargs))]
     #[allow(clippy::too_many_arguments)]
-    fn new(py: Python<'_>, num_envs: usize, seeds: &Bound<'_, PyAny>, preset: Option<String>, procedural: bool, ros_map: Option<PathBuf>, scenario: Option<PathBuf>, autoreset_mode: &str, threads: usize, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+    fn new(py: Python<'_>, #[pyo3(from_py_with = crate::errors::num_envs_arg)] num_envs: usize, seeds: &Bound<'_, PyAny>, preset: Option<String>, procedural: bool, ros_map: Option<PathBuf>, scenario: Option<PathBuf>, autoreset_mode: &str, #[pyo3(from_py_with = crate::errors::threads_arg)] threads: usize, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let args = SiteArgs { preset, procedural, ros_map, scenario };
         args.check()?;
         args.check_keys(kwargs)?;
@@ -75,6 +75,7 @@ impl PyBatch {
     #[allow(clippy::type_complexity)]
     fn step<'py>(&mut self, py: Python<'py>, actions: &Bound<'py, PyAny>, next_seeds: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<bool>>, Bound<'py, PyArray1<bool>>, Bound<'py, PyDict>, Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<bool>>)> {
         let n = self.inner.len();
+        crate::errors::refuse_bool_complex(actions, "actions")?;
         let a: Vec<f64> = if let Ok(arr) = actions.extract::<PyReadonlyArray2<f32>>() {
             if arr.shape() != [n, 3] {
                 return Err(invalid("actions", format!("expected shape ({n}, 3), got {:?}", arr.shape())));

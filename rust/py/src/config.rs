@@ -198,6 +198,11 @@ pub fn keyed(err: shieldnav_core::Error, kwargs: Option<&Bound<'_, PyDict>>) -> 
     crate::errors::to_py(err)
 }
 
+/// Whether a configuration field is a `bool` (the only fields a Python bool may set).
+fn is_bool_field<T: 'static>(_: &T) -> bool {
+    std::any::TypeId::of::<T>() == std::any::TypeId::of::<bool>()
+}
+
 /// Site options that live outside `EpisodeConfig`.
 pub struct SiteOptions {
     pub generator: GeneratorConfig,
@@ -234,6 +239,10 @@ pub fn episode_config(
     macro_rules! read {
         ($key:literal, $($path:ident).+) => {
             if let Some(v) = kw.get_item($key)? {
+                // (a bool is an int to Python: `gamma=True` was read as 1)
+                if !is_bool_field(&c.$($path).+) {
+                    crate::errors::refuse_bool_complex(&v, $key)?;
+                }
                 c.$($path).+ = v.extract().map_err(|e| invalid($key, format!("wrong type: {e}")))?;
             }
         };
@@ -252,6 +261,7 @@ pub fn episode_config(
         c.action_mode = ActionMode::parse(&name).map_err(crate::errors::to_py)?;
     }
     if let Some(v) = kw.get_item("lidar_mount")? {
+        crate::errors::refuse_bool_complex(&v, "lidar_mount")?;
         let (x, y, z, yaw): (f64, f64, f64, f64) = v
             .extract()
             .map_err(|_| invalid("lidar_mount", "expected (x, y, z, yaw)"))?;
@@ -283,6 +293,7 @@ pub fn episode_config(
             .map_err(|_| invalid("unreachable_walls", "expected a bool"))?;
     }
     if let Some(v) = kw.get_item("simplify")? {
+        crate::errors::refuse_bool_complex(&v, "simplify")?;
         let t: f64 = v
             .extract()
             .map_err(|_| invalid("simplify", "expected a number of cells"))?;
@@ -295,6 +306,10 @@ pub fn episode_config(
         return Err(invalid("lidar_vertical_fov", "applies to multi-channel LIDARs (lidar_channels > 1); a planar ring has none"));
     }
     c.world.lidar.validate().map_err(|e| keyed(e, Some(kw)))?;
+    // (scans are taken at control steps: a faster rate would be capped silently)
+    if c.world.dt.is_finite() && c.world.dt > 0.0 {
+        c.world.lidar.check_rate(c.world.dt).map_err(|e| keyed(e, Some(kw)))?;
+    }
     c.world.robot.validate().map_err(|e| keyed(e, Some(kw)))?;
     site.generator.footprint = shieldnav_core::world::Footprint {
         length: c.world.robot.length,

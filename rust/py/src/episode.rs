@@ -22,8 +22,10 @@ fn pose_tuple(p: Pose2) -> (f64, f64, f64) {
     (p.x, p.y, p.yaw)
 }
 
-/// The action as three floats: a float32 or float64 array of shape (3,), or a sequence.
+/// The action as three floats: a float32 or float64 array of shape (3,), or a sequence of
+/// real numbers (bool and complex refused).
 fn action3(obj: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
+    crate::errors::refuse_bool_complex(obj, "action")?;
     let bad_shape =
         |shape: &[usize]| invalid("action", format!("expected shape (3,), got {shape:?}"));
     // (through a view, so that a strided array of three is read too)
@@ -114,7 +116,7 @@ impl PyEpisode {
         procedural: bool,
         ros_map: Option<PathBuf>,
         scenario: Option<PathBuf>,
-        seed: u64,
+        #[pyo3(from_py_with = crate::errors::seed_arg)] seed: u64,
         kwargs: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let args = SiteArgs { preset, procedural, ros_map, scenario };
@@ -131,7 +133,7 @@ impl PyEpisode {
     }
 
     /// Starts a new episode from `seed` (a new site for procedural sources).
-    fn reset(&mut self, py: Python<'_>, seed: u64) -> PyResult<()> {
+    fn reset(&mut self, py: Python<'_>, #[pyo3(from_py_with = crate::errors::seed_arg)] seed: u64) -> PyResult<()> {
         let inner = &mut self.inner;
         py.detach(move || inner.reset(seed)).map_err(to_py)
     }
@@ -140,8 +142,19 @@ impl PyEpisode {
     /// observation is a new float32 array.
     fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<Step<'py>> {
         let a = action3(action)?;
-        let r = self.inner.step(a).map_err(to_py)?;
-        let obs = self.observe(py)?;
+        let obs = PyArray1::<f32>::zeros(py, self.inner.observation_len(), false);
+        let r = {
+            let mut w = obs.readwrite();
+            let o = w.as_slice_mut().map_err(|e| invalid("observation", e))?;
+            let inner = &mut self.inner;
+            // (the GIL released while the episode steps, as `World.step` and `Batch.step` do)
+            py.detach(move || {
+                let r = inner.step(a)?;
+                inner.observe(o)?;
+                Ok(r)
+            })
+            .map_err(to_py)?
+        };
         Ok((obs, r.reward, r.terminated, r.truncated, info(py, &r)?))
     }
 
@@ -150,9 +163,9 @@ impl PyEpisode {
         let obs = PyArray1::<f32>::zeros(py, self.inner.observation_len(), false);
         {
             let mut w = obs.readwrite();
-            self.inner
-                .observe(w.as_slice_mut().map_err(|e| invalid("observation", e))?)
-                .map_err(to_py)?;
+            let o = w.as_slice_mut().map_err(|e| invalid("observation", e))?;
+            let inner = &self.inner;
+            py.detach(move || inner.observe(o)).map_err(to_py)?;
         }
         Ok(obs)
     }

@@ -23,3 +23,102 @@ pub fn to_py(err: Error) -> PyErr {
 pub fn invalid(name: &str, reason: impl std::fmt::Display) -> PyErr {
     InvalidArgumentError::new_err(format!("invalid `{name}`: {reason}"))
 }
+
+/// Refuses bool and complex input where numbers are expected: a numpy array or scalar of bool
+/// or complex dtype (numpy would read them as 1/0 or drop the imaginary part), or a Python
+/// `bool` / `complex`, or a list or tuple holding one. `name` is the argument's name.
+pub fn refuse_bool_complex(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
+    fn kind(o: &Bound<'_, PyAny>) -> Option<char> {
+        if o.is_instance_of::<pyo3::types::PyBool>() {
+            return Some('b');
+        }
+        if o.is_instance_of::<pyo3::types::PyComplex>() {
+            return Some('c');
+        }
+        let dtype = o.getattr(pyo3::intern!(o.py(), "dtype")).ok()?;
+        let k: String = dtype.getattr(pyo3::intern!(o.py(), "kind")).ok()?.extract().ok()?;
+        k.chars().next()
+    }
+    let what = |k: char| match k {
+        'b' => Some("bool"),
+        'c' => Some("complex"),
+        _ => None,
+    };
+    if let Some(w) = kind(obj).and_then(what) {
+        return Err(invalid(name, format!("expected real numbers, not {w} (got {})", repr(obj))));
+    }
+    if obj.is_instance_of::<pyo3::types::PyList>() || obj.is_instance_of::<pyo3::types::PyTuple>() {
+        for item in obj.try_iter()? {
+            let item = item?;
+            if let Some(w) = kind(&item).and_then(what) {
+                return Err(invalid(name, format!("expected real numbers, not {w} (got {})", repr(obj))));
+            }
+            if item.is_instance_of::<pyo3::types::PyList>() || item.is_instance_of::<pyo3::types::PyTuple>() {
+                refuse_bool_complex(&item, name)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `repr(obj)`, or nothing if that fails.
+fn repr(obj: &Bound<'_, PyAny>) -> String {
+    obj.repr().map(|r| r.to_string()).unwrap_or_default()
+}
+
+/// An integer argument from 0 to 2**64 − 1: bool, negative, fractional or too big values are
+/// an `InvalidArgumentError` naming `name` (PyO3 raised a bare `OverflowError`).
+pub fn u64_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<u64> {
+    refuse_bool_complex(obj, name)?;
+    obj.extract::<u64>().map_err(|_| invalid(name, format!("expected {what} (an integer from 0 to 2**64 - 1), got {}", repr(obj))))
+}
+
+/// [`u64_arg`] for a count held as `usize`.
+pub fn usize_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<usize> {
+    let v = u64_arg(name, obj, what)?;
+    usize::try_from(v).map_err(|_| invalid(name, format!("expected {what}, got {v}: too big")))
+}
+
+/// `N` real numbers (a tuple, list or array of exactly `N`), named `name` in the error;
+/// `what` says what they are (`"(x, y, z, yaw)"`).
+pub fn reals_arg<const N: usize>(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; N]> {
+    refuse_bool_complex(obj, name)?;
+    obj.extract::<[f64; N]>().map_err(|_| invalid(name, format!("expected {what}: {N} numbers, got {}", repr(obj))))
+}
+
+/// `seed` of `Episode(...)` and `Episode.reset(seed)` (for `#[pyo3(from_py_with)]`).
+pub fn seed_arg(obj: &Bound<'_, PyAny>) -> PyResult<u64> {
+    u64_arg("seed", obj, "a seed")
+}
+
+/// `num_envs` of `Batch(...)`.
+pub fn num_envs_arg(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    usize_arg("num_envs", obj, "a number of episodes")
+}
+
+/// `threads` of `Batch(...)`.
+pub fn threads_arg(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    usize_arg("threads", obj, "a number of threads")
+}
+
+/// `channels` of `World(...)`.
+pub fn channels_arg(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    usize_arg("channels", obj, "a channel count (1 or 16..=128)")
+}
+
+/// `columns` of `World(...)`.
+pub fn columns_arg(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    usize_arg("columns", obj, "a column count (512, 1024 or 2048)")
+}
+
+/// `mount` of `World(...)`.
+pub fn mount_arg(obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64, f64, f64)> {
+    let [x, y, z, yaw] = reals_arg::<4>("mount", obj, "(x, y, z, yaw)")?;
+    Ok((x, y, z, yaw))
+}
+
+/// `vertical_fov` of `World(...)`.
+pub fn vertical_fov_arg(obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+    let [lo, hi] = reals_arg::<2>("vertical_fov", obj, "(low, high) in rad")?;
+    Ok((lo, hi))
+}

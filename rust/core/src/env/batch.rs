@@ -5,6 +5,7 @@
 //! Episode `i` of a batch behaves exactly like a lone [`Episode`] built and reset with the
 //! same seeds: the batch only schedules them.
 
+use super::action::check_action;
 use super::episode::{Episode, EpisodeConfig, EpisodeSummary, Site, StepReport};
 use super::pool::Pool;
 use crate::error::{Error, Result};
@@ -117,12 +118,27 @@ impl Batch {
     /// entry of `next_seeds`. Writes the observations (N × L), the last observation of
     /// episodes that ended in this call (`final_obs`, N × L, `SameStep` only) and one outcome
     /// per episode.
+    ///
+    /// Every row that will be stepped (not those of episodes about to reset) is checked
+    /// first: a bad row is an error naming it (`actions[2]`) and no episode is stepped.
     pub fn step(&mut self, actions: &[Real], next_seeds: &[u64], obs: &mut [f32], final_obs: &mut [f32], out: &mut [SlotOutcome]) -> Result<()> {
         self.check_len("actions", actions.len(), 3)?;
         self.check_len("next_seeds", next_seeds.len(), 1)?;
         self.check_len("observations", obs.len(), self.obs_len)?;
         self.check_len("final_observations", final_obs.len(), self.obs_len)?;
         self.check_len("outcomes", out.len(), 1)?;
+        for (i, &nr) in self.needs_reset.iter().enumerate() {
+            if nr {
+                continue;
+            }
+            let a = [actions[3 * i], actions[3 * i + 1], actions[3 * i + 2]];
+            if check_action(&a).is_err() {
+                return Err(Error::invalid(
+                    "actions",
+                    format!("actions[{i}]: every entry must be finite and in [-1, 1], got {a:?}; no episode was stepped"),
+                ));
+            }
+        }
         let (l, mode) = (self.obs_len, self.mode);
         type Work<'a> = (&'a mut Episode, &'a mut bool, &'a mut [f32], &'a mut [f32], &'a mut SlotOutcome);
         let mut work: Vec<Work<'_>> = self
@@ -233,5 +249,31 @@ mod tests {
         let e = b.step(&[0.0; 3], &[1, 2], &mut obs, &mut fin, &mut out).unwrap_err();
         assert!(e.to_string().contains("actions"), "{e}");
         assert!(Batch::new(Site::Preset("constricted_passage".into()), EpisodeConfig::default(), &[], AutoReset::NextStep, 1).is_err());
+    }
+
+    #[test]
+    fn a_bad_row_steps_no_episode_and_is_named() {
+        let cfg = EpisodeConfig { time_limit: Some(2), ..Default::default() };
+        let mut b = Batch::new(Site::Preset("constricted_passage".into()), cfg, &[1, 2, 3, 4], AutoReset::NextStep, 2).unwrap();
+        let l = b.observation_len();
+        let (mut obs, mut fin, mut out) = (vec![0f32; 4 * l], vec![0f32; 4 * l], vec![SlotOutcome::default(); 4]);
+        let good = actions(4, 0);
+        b.step(&good, &[5, 6, 7, 8], &mut obs, &mut fin, &mut out).unwrap();
+        let steps = |b: &Batch| b.episodes().iter().map(|e| e.summary().steps).collect::<Vec<_>>();
+        let before = steps(&b);
+        for bad in [Real::NAN, 1.5, Real::INFINITY] {
+            let mut a = good.clone();
+            a[3 * 2 + 1] = bad;
+            let e = b.step(&a, &[5, 6, 7, 8], &mut obs, &mut fin, &mut out).unwrap_err();
+            assert!(e.to_string().contains("actions[2]"), "{e}");
+            assert_eq!(steps(&b), before, "a refused step stepped some episode");
+        }
+        // the last step ends every episode; on the next call (NextStep) they reset, so their
+        // rows are not read and a NaN there is no error
+        b.step(&good, &[5, 6, 7, 8], &mut obs, &mut fin, &mut out).unwrap();
+        assert!(out.iter().all(|o| o.ended.is_some()));
+        let nan = vec![Real::NAN; 12];
+        b.step(&nan, &[5, 6, 7, 8], &mut obs, &mut fin, &mut out).unwrap();
+        assert!(out.iter().all(|o| o.reset));
     }
 }

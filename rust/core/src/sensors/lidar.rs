@@ -143,6 +143,27 @@ impl LidarConfig {
     }
 }
 
+impl LidarConfig {
+    /// Checks that the scan rate can be honoured with the control period `dt` (s): scans are
+    /// taken at control steps (each at the first step at or after its due time, the step's
+    /// time reported as the scan's `stamp`), so a rate faster than the control rate `1 / dt`
+    /// would silently be capped to it. The error names `rate_hz` and `dt`.
+    pub fn check_rate(&self, dt: Real) -> Result<()> {
+        // (within a relative 1e-9: 10 Hz at 0.1 s is one scan a step)
+        if self.rate_hz * dt > 1.0 + 1e-9 {
+            return Err(Error::invalid(
+                "rate_hz",
+                format!(
+                    "{} Hz is faster than the control rate 1 / dt = {} Hz (dt = {dt} s): scans are taken at control steps; lower `rate_hz` or `dt`",
+                    self.rate_hz,
+                    1.0 / dt
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// One revolution's returns.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Scan {
@@ -187,6 +208,8 @@ pub struct Lidar {
     pub(super) indexed: super::lidar_indexed::IndexedScratch,
     /// Scratch of [`Lidar::scan_mesh_into`].
     pub(super) mesh: super::lidar_mesh::MeshScratch,
+    /// Scratch of [`Lidar::sweep_tops`]: the edges of the solids found, in the sensor frame.
+    top_edges: Vec<([Real; 2], [Real; 2])>,
     /// Scratch of the noise draws (one normal per beam).
     normals: Vec<f32>,
     /// Scratch of the dropout draws (one uniform per beam).
@@ -216,6 +239,7 @@ impl Lidar {
             order: Vec::new(),
             indexed: Default::default(),
             mesh: Default::default(),
+            top_edges: Vec::new(),
             normals: Vec::new(),
             uniforms: Vec::new(),
             simd: SimdLevel::detect(),
@@ -277,6 +301,7 @@ impl Lidar {
         }
         // (an AVX2 build of this sweep measured slower, unlike the indexed one)
         self.sweep_walls(walls, sp, out);
+        self.sweep_tops(walls, sp, &mut out.ranges);
         self.finish(rng, out);
         Ok(())
     }
@@ -329,6 +354,136 @@ impl Lidar {
         }
         self.order = order;
         self.visible = visible;
+    }
+
+    /// The top faces of solids, for scans of more than one channel (a planar ring never looks
+    /// down on one): a solid is a closed run of consecutive one-sided walls of one height, each
+    /// ending where the next starts (or each starting where the next ends), running
+    /// counter-clockwise around it (the solid on their left) — the edges of a polygon of a map
+    /// and of a moving obstacle, as [`crate::world::Polygon::edges`] and
+    /// [`crate::world::MovingObstacle::segments_at`] give them. Its top is the horizontal face at
+    /// its height over the polygon: a beam descending from above it (mount higher than the
+    /// solid) hits it at the exact ray–plane distance `(height − z) / tan(elevation)` (horizontal)
+    /// wherever that point lies inside the polygon, and keeps the nearer of that and its wall
+    /// hits. (A beam inside a solid's outline below its top has hit the top or a front face
+    /// first, so its back faces, skipped, would never be the nearest hit.)
+    pub(super) fn sweep_tops(&mut self, walls: &[&[Segment]], sp: Pose2, best: &mut [Real]) {
+        let c = self.config;
+        if c.channels == 1 {
+            return;
+        }
+        let zs = c.mount.z;
+        if !self.el_tan.iter().any(|&t| t < 0.0) {
+            return;
+        }
+        let (s, co) = sp.yaw.sin_cos();
+        let frame = |p: [Real; 2]| {
+            let (dx, dy) = (p[0] - sp.x, p[1] - sp.y);
+            [co * dx + s * dy, -s * dx + co * dy]
+        };
+        let mut edges = std::mem::take(&mut self.top_edges);
+        for slice in walls {
+            let n = slice.len();
+            let mut i = 0;
+            while i < n {
+                let first = slice[i];
+                if !(first.one_sided && first.height < zs) {
+                    i += 1;
+                    continue;
+                }
+                // grow a chain of one-sided walls of the same height until it closes
+                let mut j = i + 1;
+                let mut forward: Option<bool> = None;
+                let mut closed = false;
+                while j < n {
+                    let (prev, next) = (slice[j - 1], slice[j]);
+                    let link_fwd = prev.b == next.a;
+                    let link_bwd = prev.a == next.b;
+                    let ok = next.one_sided && next.height == first.height && match forward {
+                        None => link_fwd || link_bwd,
+                        Some(true) => link_fwd,
+                        Some(false) => link_bwd,
+                    };
+                    if !ok {
+                        break;
+                    }
+                    if forward.is_none() {
+                        forward = Some(link_fwd);
+                    }
+                    j += 1;
+                    let last = slice[j - 1];
+                    if j - i >= 3 && (if forward == Some(true) { last.b == first.a } else { last.a == first.b }) {
+                        closed = true;
+                        break;
+                    }
+                }
+                if closed {
+                    let run = &slice[i..j];
+                    // twice the signed area: the solid on the walls' left is inside the loop
+                    let area2: Real = run.iter().map(|w| cross2(w.a, w.b)).sum();
+                    if area2 > 0.0 {
+                        edges.clear();
+                        edges.extend(run.iter().map(|w| (frame(w.a), frame(w.b))));
+                        self.sweep_top(&edges, first.height, zs, best);
+                    }
+                    i = j;
+                } else {
+                    i = j.max(i + 1);
+                }
+            }
+        }
+        self.top_edges = edges;
+    }
+
+    /// The top at `height` of one solid whose outline's `edges` (counter-clockwise, sensor
+    /// frame) do not enclose the sensor (see [`Lidar::sweep_tops`]).
+    fn sweep_top(&self, edges: &[([Real; 2], [Real; 2])], height: Real, zs: Real, best: &mut [Real]) {
+        let c = self.config;
+        let n = c.columns;
+        let dmin = edges.iter().map(|&(a, b)| seg_origin_distance(a, b)).fold(Real::INFINITY, Real::min);
+        let dmax = edges.iter().map(|&(a, _)| (a[0] * a[0] + a[1] * a[1]).sqrt()).fold(0.0, Real::max);
+        if dmin <= 0.0 || dmin > c.max_range {
+            return; // the sensor is on the outline (not in free space), or it is out of range
+        }
+        let inside = |p: [Real; 2]| {
+            let mut inside = false;
+            for &(a, b) in edges {
+                if (a[1] > p[1]) != (b[1] > p[1]) {
+                    let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                    if p[0] < x {
+                        inside = !inside;
+                    }
+                }
+            }
+            inside
+        };
+        for (k, &tan) in self.el_tan.iter().enumerate() {
+            if tan >= 0.0 {
+                continue;
+            }
+            // horizontal distance at which the beam is at the top's height
+            let t = (height - zs) / tan;
+            if !(t >= dmin && t <= dmax) {
+                continue;
+            }
+            let r = t * self.el_sec[k];
+            // every beam into the outline crosses an edge facing the sensor: their columns
+            for &(a, b) in edges {
+                let cr = cross2(a, b);
+                if cr >= 0.0 {
+                    continue; // seen from behind, or collinear with the sensor
+                }
+                let (j0, count) = self.wall_beams(a, b, cr);
+                let mut i = (j0 & (n as i64 - 1)) as usize;
+                for _ in 0..count {
+                    let cell = &mut best[k * n + i];
+                    if r < *cell && inside([t * self.az_cos[i], t * self.az_sin[i]]) {
+                        *cell = r;
+                    }
+                    i = (i + 1) & (n - 1);
+                }
+            }
+        }
     }
 
     /// Sweeps one wall given in the sensor frame, `dmin` its distance from the sensor.
@@ -878,6 +1033,16 @@ mod tests {
             let e = Lidar::new(cfg).unwrap_err().to_string();
             assert!(e.contains(field), "{e}");
         }
+    }
+
+    #[test]
+    fn a_scan_rate_faster_than_the_control_rate_is_an_error_naming_both() {
+        let c = LidarConfig { rate_hz: 20.0, ..Default::default() };
+        let e = c.check_rate(0.1).unwrap_err().to_string();
+        assert!(e.contains("rate_hz") && e.contains("dt"), "{e}");
+        c.check_rate(0.05).unwrap();
+        LidarConfig { rate_hz: 10.0, ..Default::default() }.check_rate(0.1).unwrap();
+        LidarConfig { rate_hz: 20.0, ..Default::default() }.check_rate(0.02).unwrap();
     }
 
     #[test]

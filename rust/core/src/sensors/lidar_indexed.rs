@@ -326,6 +326,7 @@ impl Lidar {
             self.sweep_extra(extra, sp, &mut out.ranges);
         } else {
             self.sweep_index_any(index, extra, sp, out);
+            self.sweep_tops(&[index.segments(), extra], sp, &mut out.ranges);
         }
         self.finish(rng, out);
         Ok(())
@@ -354,6 +355,7 @@ impl Lidar {
     pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
         let sp = self.begin_scan(body, stamp, out)?;
         self.sweep_index_any(index, extra, sp, out);
+        self.sweep_tops(&[index.segments(), extra], sp, &mut out.ranges);
         self.finish(rng, out);
         Ok(())
     }

@@ -9,6 +9,9 @@ use super::geometry::{norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
 use crate::error::{Error, Result};
 use crate::math::Real;
 
+/// How long (s) a walker ([`Trajectory::walk`]) takes to turn at a corner.
+pub const WALK_TURN_TIME: Real = 0.2;
+
 /// Piecewise-linear key poses `(t, pose)`; before the first key and after the last the pose is
 /// held. Yaw is interpolated along the shorter arc.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -30,7 +33,11 @@ impl Trajectory {
     }
 
     /// Walks through `waypoints` at constant `speed` (m/s) starting at `t_start`, facing the
-    /// direction of travel.
+    /// direction of travel: along each leg the heading is the leg's direction, except that at
+    /// each corner it turns (along the shorter arc, at a constant rate) from the previous leg's
+    /// direction to the new one during the first [`WALK_TURN_TIME`] seconds of the new leg, or
+    /// over the whole leg if it is shorter than that. The walker keeps its speed through the
+    /// turn.
     pub fn walk(waypoints: &[Point2], speed: Real, t_start: Real) -> Result<Self> {
         if !(speed.is_finite() && speed > 0.0) {
             return Err(Error::invalid("speed", format!("must be finite and > 0, got {speed}")));
@@ -42,18 +49,27 @@ impl Trajectory {
             return Err(Error::invalid("start_time", format!("must be within {:?} s, got {t_start:?}", super::scenario::TIME_LIMIT)));
         }
         let mut t = t_start;
-        let mut keys = Vec::with_capacity(waypoints.len());
+        let mut keys = Vec::with_capacity(2 * waypoints.len());
         for (i, w) in waypoints.windows(2).enumerate() {
             let d = sub2(w[1], w[0]);
-            let yaw = d[1].atan2(d[0]);
-            if i == 0 {
-                keys.push((t, Pose2::new(w[0][0], w[0][1], yaw)));
-            }
             let len = norm2(d);
             if len == 0.0 {
                 return Err(Error::invalid("waypoints", format!("waypoints {i} and {} coincide", i + 1)));
             }
-            t += len / speed;
+            let yaw = d[1].atan2(d[0]);
+            let duration = len / speed;
+            if i == 0 {
+                keys.push((t, Pose2::new(w[0][0], w[0][1], yaw)));
+            } else if duration > WALK_TURN_TIME {
+                // the corner's key holds the previous leg's heading; the turn ends a little
+                // way along the new leg, at the same speed
+                let s = WALK_TURN_TIME / duration;
+                let tt = t + WALK_TURN_TIME;
+                if tt > t && tt < t + duration {
+                    keys.push((tt, Pose2::new(w[0][0] + s * d[0], w[0][1] + s * d[1], yaw)));
+                }
+            }
+            t += duration;
             keys.push((t, Pose2::new(w[1][0], w[1][1], yaw)));
         }
         Ok(Self { keys })
@@ -151,10 +167,39 @@ mod tests {
     #[test]
     fn walk_keeps_the_speed() {
         let tr = Trajectory::walk(&[[0.0, 0.0], [3.0, 0.0], [3.0, 4.0]], 1.25, 2.0).unwrap();
-        assert_eq!(tr.keys.len(), 3);
-        assert!((tr.keys[2].0 - (2.0 + 7.0 / 1.25)).abs() < 1e-12);
+        // the two corners' keys, and one where the turn at [3, 0] ends
+        assert_eq!(tr.keys.len(), 4);
+        assert!((tr.keys[3].0 - (2.0 + 7.0 / 1.25)).abs() < 1e-12);
         assert!(Trajectory::walk(&[[0.0, 0.0]], 1.0, 0.0).is_err());
         assert!(Trajectory::walk(&[[0.0, 0.0], [1.0, 0.0]], 0.0, 0.0).is_err());
+    }
+
+    /// A walker faces where it goes: after the corner of `[[0,0],[4,0],[4,4]]` at 1 m/s its
+    /// heading is π/2 (it was 0.39, 0.79, 1.18 rad at 5, 6, 7 s: the turn spread over the leg),
+    /// having turned within [`WALK_TURN_TIME`] of the corner, at the walking speed throughout.
+    #[test]
+    fn walker_faces_the_direction_of_travel_after_a_short_turn() {
+        let tr = Trajectory::walk(&[[0.0, 0.0], [4.0, 0.0], [4.0, 4.0]], 1.0, 0.0).unwrap();
+        tr.validate().unwrap();
+        for t in [0.5, 2.0, 3.99] {
+            assert!(tr.pose_at(t).yaw.abs() < 1e-12, "t {t}: {:?}", tr.pose_at(t));
+        }
+        for t in [4.0 + WALK_TURN_TIME, 4.5, 5.0, 6.0, 7.0, 7.9, 9.0] {
+            let p = tr.pose_at(t);
+            assert!((p.yaw - FRAC_PI_2).abs() < 1e-12, "t {t}: {p:?}");
+        }
+        let mid = tr.pose_at(4.0 + 0.5 * WALK_TURN_TIME);
+        assert!((mid.yaw - FRAC_PI_2 / 2.0).abs() < 1e-9, "{mid:?}");
+        // the position moves at the speed along the legs, through the turn too
+        for (t, x, y) in [(2.0, 2.0, 0.0), (4.1, 4.0, 0.1), (5.0, 4.0, 1.0), (7.0, 4.0, 3.0), (8.0, 4.0, 4.0)] {
+            let p = tr.pose_at(t);
+            assert!((p.x - x).abs() < 1e-12 && (p.y - y).abs() < 1e-12, "t {t}: {p:?}");
+        }
+        // a leg shorter than the turn: the turn spans it
+        let short = Trajectory::walk(&[[0.0, 0.0], [1.0, 0.0], [1.0, 0.1], [2.0, 0.1]], 1.0, 0.0).unwrap();
+        short.validate().unwrap();
+        assert!((short.pose_at(1.1).yaw - FRAC_PI_2).abs() < 1e-12);
+        assert!((short.pose_at(1.1 + WALK_TURN_TIME).yaw).abs() < 1e-12);
     }
 
     #[test]

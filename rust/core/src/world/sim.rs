@@ -202,6 +202,8 @@ impl World {
             return Err(Error::invalid("dt", format!("must be in (0, 0.1] s, got {}", config.dt)));
         }
         let lidar = Lidar::new(config.lidar)?;
+        // (scans are taken at control steps: a faster rate would be capped silently)
+        config.lidar.check_rate(config.dt)?;
         let tracker = Tracker::new(config.tracker)?;
         let physics = PhysicsScene::new(config.robot, &scenario.map.segments, &scenario.obstacles, scenario.start, 0.0)?;
         let odometry = Odometry::new(scenario.odometry.clone(), scenario.start, 0.0)?;
