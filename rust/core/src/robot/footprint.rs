@@ -74,6 +74,83 @@ pub fn footprint_segment_distance(shape: &RobotShape, pose: Pose2, s: &Segment) 
     (d2.sqrt() - r).max(0.0)
 }
 
+/// Signed distance (m) between the footprint at `pose` and a convex outline `vertices` (world
+/// points, either winding; two points are a wall segment): the gap when apart, minus the
+/// penetration depth (the least translation that separates them) when they overlap.
+///
+/// Exact in `f64`: the footprint is its inner rectangle (shrunk by `corner_radius`) grown by
+/// that radius, so its signed distance is the rectangle's less the radius; the rectangle's
+/// is, when a separating axis exists, the least vertex-to-edge distance, and otherwise the
+/// least overlap over the edge normals of both outlines (separating axes: in the plane these
+/// are the only candidate axes of two convex polygons).
+pub fn footprint_signed_distance(shape: &RobotShape, pose: Pose2, vertices: &[Point2]) -> Real {
+    let local: Vec<Point2> = vertices.iter().map(|&p| pose.inverse_transform_point(p)).collect();
+    inner_rect_signed_distance(shape, &local) - shape.corner_radius
+}
+
+/// The signed distance between the footprint's inner rectangle (centred at the origin, axis
+/// aligned, half extents `length / 2 − r`, `width / 2 − r`) and the convex outline `q` given in
+/// the body frame (see [`footprint_signed_distance`]; the corner radius is not subtracted).
+pub(crate) fn inner_rect_signed_distance(shape: &RobotShape, q: &[Point2]) -> Real {
+    let r = shape.corner_radius;
+    let (hx, hy) = ((0.5 * shape.length - r).max(0.0), (0.5 * shape.width - r).max(0.0));
+    let n = q.len();
+    if n == 0 {
+        return Real::INFINITY;
+    }
+    // the rectangle's own axes
+    let (mut x0, mut x1, mut y0, mut y1) = (Real::INFINITY, Real::NEG_INFINITY, Real::INFINITY, Real::NEG_INFINITY);
+    for p in q {
+        x0 = x0.min(p[0]);
+        x1 = x1.max(p[0]);
+        y0 = y0.min(p[1]);
+        y1 = y1.max(p[1]);
+    }
+    let mut best = (x0 - hx).max(-hx - x1).max((y0 - hy).max(-hy - y1));
+    // the outline's edge normals (a segment has one)
+    let edges = if n == 2 { 1 } else if n == 1 { 0 } else { n };
+    for i in 0..edges {
+        let (a, b) = (q[i], q[(i + 1) % n]);
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let len = (e[0] * e[0] + e[1] * e[1]).sqrt();
+        if len == 0.0 {
+            continue;
+        }
+        let u = [-e[1] / len, e[0] / len];
+        let ext = hx * u[0].abs() + hy * u[1].abs();
+        let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
+        for p in q {
+            let d = p[0] * u[0] + p[1] * u[1];
+            lo = lo.min(d);
+            hi = hi.max(d);
+        }
+        best = best.max((lo - ext).max(-ext - hi));
+    }
+    if best <= 0.0 {
+        return best;
+    }
+    // apart: the distance is between a vertex of one and an edge of the other
+    let to_rect2 = |p: &Point2| {
+        let dx = (p[0].abs() - hx).max(0.0);
+        let dy = (p[1].abs() - hy).max(0.0);
+        dx * dx + dy * dy
+    };
+    let mut d2 = q.iter().map(to_rect2).fold(Real::INFINITY, Real::min);
+    let corners = [[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]];
+    for i in 0..edges.max(1).min(n) {
+        let (a, b) = (q[i], q[(i + 1) % n]);
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let l2 = e[0] * e[0] + e[1] * e[1];
+        for c in corners {
+            let w = [c[0] - a[0], c[1] - a[1]];
+            let t = if l2 > 0.0 { ((w[0] * e[0] + w[1] * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+            let (x, y) = (w[0] - t * e[0], w[1] - t * e[1]);
+            d2 = d2.min(x * x + y * y);
+        }
+    }
+    d2.sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

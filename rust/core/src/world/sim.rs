@@ -133,7 +133,8 @@ pub struct StepOutcome {
     pub true_pose: Pose2,
     /// The odometry estimate.
     pub estimated_pose: Pose2,
-    /// The robot's body-frame velocity from the tracker `(vx, vy, ω)`.
+    /// The robot's body-frame velocity `(vx, vy, ω)` achieved in the step: the tracker's,
+    /// unless contacts stopped or pushed the body (see [`PhysicsScene::achieved_velocity`]).
     pub velocity: [Real; 3],
     /// Contacts of the true footprint after the step.
     pub contacts: ContactReport,
@@ -305,6 +306,11 @@ impl World {
         } else {
             self.physics.step(tr.velocity, dt, &self.scenario.obstacles, t_next)?
         };
+        // the tracker goes on from the velocity the body achieved (a wall or an obstacle may
+        // have stopped or pushed it), so that its acceleration limits hold from the real
+        // velocity and the velocity reported is the body's
+        let velocity = self.physics.achieved_velocity();
+        self.tracker.set_velocity(velocity);
         self.time = t_next;
         self.steps += 1;
         let true_pose = self.physics.robot_pose();
@@ -313,7 +319,7 @@ impl World {
         if scanned {
             self.take_scan()?;
         }
-        Ok(StepOutcome { time: self.time, true_pose, estimated_pose, velocity: tr.velocity, contacts: self.contacts, scanned, saturated: tr.saturated })
+        Ok(StepOutcome { time: self.time, true_pose, estimated_pose, velocity, contacts: self.contacts, scanned, saturated: tr.saturated })
     }
 
     /// The latest scan.
