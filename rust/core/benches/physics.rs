@@ -29,6 +29,21 @@ fn bench(c: &mut Criterion) {
         })
     });
     c.bench_function("physics_contacts_query_only", |b| b.iter(|| black_box(scene.contacts())));
+    // the same scene, the robot driving straight down the lane for 10 s (nothing within reach
+    // of a step: one rapier step per step), where the steps above press it into walls and
+    // obstacles most of the time (steps split near them: about two rapier steps per step)
+    let mut scene = PhysicsScene::new(RobotShape::default(), &s.map.segments, &obstacles, s.start, 0.0).unwrap();
+    let mut t = 0.0;
+    c.bench_function("physics_step_robot_free_driving", |b| {
+        b.iter(|| {
+            t += 0.02;
+            if t > 10.0 {
+                t = 0.0;
+                scene.set_robot_pose(s.start).unwrap();
+            }
+            black_box(scene.step(black_box([0.5, 0.0, 0.0]), 0.02, &obstacles, t).unwrap());
+        })
+    });
 }
 
 criterion_group!(benches, bench);
