@@ -82,6 +82,9 @@ pub struct PhysicsScene {
     /// measuring again).
     near: Vec<(Real, Option<usize>)>,
     near_valid: bool,
+    /// The pose (local frame, `f64`) the robot was placed at, until it moves: the pose reads
+    /// exactly as given (`f32` rounding would move it by up to about 1e-6 m).
+    placed: Option<Pose2>,
 }
 
 impl std::fmt::Debug for PhysicsScene {
@@ -175,6 +178,7 @@ impl PhysicsScene {
             scratch: Vec::new(),
             near: Vec::new(),
             near_valid: false,
+            placed: Some(Pose2::new(s[0], s[1], wrap_angle(start.yaw))),
         })
     }
 
@@ -185,12 +189,16 @@ impl PhysicsScene {
 
     /// The robot's pose in the local frame.
     fn local_robot_pose(&self) -> Pose2 {
+        if let Some(p) = self.placed {
+            return p;
+        }
         let b = &self.world.bodies[self.robot];
         let t = b.translation();
         Pose2::new(t.x as Real, t.y as Real, wrap_angle(b.rotation().angle() as Real))
     }
 
-    /// The robot's true pose.
+    /// The robot's true pose: until the robot moves, exactly where it was placed (at the
+    /// start or by [`PhysicsScene::set_robot_pose`]).
     pub fn robot_pose(&self) -> Pose2 {
         let p = self.local_robot_pose();
         Pose2::new(p.x + self.origin[0], p.y + self.origin[1], p.yaw)
@@ -217,6 +225,7 @@ impl PhysicsScene {
         let b = &mut self.world.bodies[self.robot];
         b.set_position(rapier2d::math::Pose::new(v(x, y), p.yaw as f32), true);
         self.near_valid = false;
+        self.placed = Some(Pose2::new(x, y, wrap_angle(p.yaw)));
         Ok(())
     }
 
@@ -277,6 +286,7 @@ impl PhysicsScene {
             }
             self.world.step();
         }
+        self.placed = None;
         self.substeps += n as u64;
         // the achieved velocity, in the body frame the command was given in
         let l = self.world.bodies[self.robot].linvel();
@@ -329,6 +339,7 @@ impl PhysicsScene {
             pose.translation += lin * h;
         }
         rb.set_position(pose, true);
+        self.placed = None;
         for (k, o) in obstacles.iter().enumerate() {
             let p = self.obstacle_local_pose(o, t_next);
             self.obstacle_poses[k] = p;
@@ -551,5 +562,28 @@ mod tests {
         assert_eq!(cached.rapier_steps(), fresh.rapier_steps());
         assert!(cached.rapier_steps() > steps + 500, "{} rapier steps for {steps}", cached.rapier_steps());
         assert!(read > 1000 && touching > 100, "{read} steps read the distances, {touching} touching");
+    }
+
+    /// A placed robot reads exactly where it was placed (rapier's `f32` pose is up to about
+    /// 1e-6 m off), at the start and after `set_robot_pose`, and from the first step on where
+    /// rapier moved it.
+    #[test]
+    fn a_placed_robot_reads_exactly_where_it_was_placed() {
+        let walls = [Segment::new([0.0, 30.0], [40.0, 30.0], 2.0), Segment::new([0.0, 45.0], [40.0, 45.0], 2.0)];
+        let start = Pose2::new(20.05, 38.05, 0.3);
+        let mut sc = PhysicsScene::new(RobotShape::default(), &walls, &[], start, 0.0).unwrap();
+        assert_eq!(sc.robot_pose(), start);
+        let b = &sc.world.bodies[sc.robot];
+        let rapier = [b.translation().x as Real + sc.origin[0], b.translation().y as Real + sc.origin[1]];
+        assert_ne!(rapier, [start.x, start.y], "the start lies on the f32 grid: the test proves nothing");
+        sc.step([0.5, 0.0, 0.0], 0.02, &[], 0.02).unwrap();
+        let p = sc.robot_pose();
+        assert!((p.x - start.x - 0.01 * start.yaw.cos()).abs() < 1e-5 && p.x != start.x, "{p:?}");
+        let again = Pose2::new(12.3456789, 37.1, -2.0);
+        sc.set_robot_pose(again).unwrap();
+        assert_eq!(sc.robot_pose(), again);
+        // an unwrapped yaw reads wrapped
+        sc.set_robot_pose(Pose2::new(12.0, 37.0, 7.0)).unwrap();
+        assert_eq!(sc.robot_pose().yaw, wrap_angle(7.0));
     }
 }
