@@ -4,8 +4,12 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shieldnav_core::robot::footprint::footprint_signed_distance;
-use shieldnav_core::robot::{footprint_segment_distance, PhysicsScene, RobotShape, TrackerConfig};
+use shieldnav_core::robot::{PhysicsScene, RobotShape, TrackerConfig};
 use shieldnav_core::world::{preset, MovingObstacle, Polygon, Pose2, Scenario, Segment, StaticMap, Trajectory, World, WorldConfig};
+
+#[path = "common/distance.rs"]
+mod distance;
+use distance::reference_distance;
 
 const TOL: f64 = 1e-3;
 
@@ -115,7 +119,7 @@ fn contacts_agree_with_brute_force_at_random_poses() {
                 let mut walls = 0;
                 let mut depth: f64 = 0.0;
                 for w in &s.map.segments {
-                    let d = footprint_segment_distance(&shape, got, w);
+                    let d = reference_distance(&shape, got, w);
                     if (d - TOL).abs() < 1e-9 {
                         continue;
                     }
@@ -132,7 +136,7 @@ fn contacts_agree_with_brute_force_at_random_poses() {
                     let q: Vec<[f64; 2]> = o.shape.vertices.iter().map(|&v| op.transform_point(v)).collect();
                     let mut edges = Vec::new();
                     o.segments_at(0.0, &mut edges);
-                    let d = edges.iter().map(|e| footprint_segment_distance(&shape, got, e)).fold(f64::INFINITY, f64::min);
+                    let d = edges.iter().map(|e| reference_distance(&shape, got, e)).fold(f64::INFINITY, f64::min);
                     let centre_inside = Polygon { vertices: q.clone(), height: 1.0 }.contains([got.x, got.y]);
                     let d = if centre_inside { 0.0 } else { d };
                     if d <= TOL {
@@ -379,7 +383,7 @@ fn every_touching_step_is_a_contact() {
                     cmd = [rng.random_range(-1.6..1.6), rng.random_range(-0.8..0.8), rng.random_range(-1.5..1.5)];
                 }
                 let o = w.step(cmd).unwrap();
-                let d = w.walls_now().iter().map(|s| footprint_segment_distance(&shape, o.true_pose, s)).fold(f64::INFINITY, f64::min);
+                let d = w.walls_now().iter().map(|s| reference_distance(&shape, o.true_pose, s)).fold(f64::INFINITY, f64::min);
                 if (d - TOL).abs() > 1e-9 {
                     assert_eq!(o.contacts.any(), d <= TOL, "{name} seed {seed} step {k} at {:?}: {d} m, {:?}", o.true_pose, o.contacts);
                 }

@@ -1,6 +1,9 @@
 //! The running world: determinism, scan timing, odometry faults, moving obstacles, contacts.
 
 use shieldnav_core::robot::footprint_segment_distance;
+#[path = "common/distance.rs"]
+mod distance;
+use distance::reference_distance;
 use shieldnav_core::sensors::LidarConfig;
 use shieldnav_core::world::{World, WorldConfig};
 
@@ -92,7 +95,7 @@ fn driving_into_the_cabinet_is_a_contact_judged_on_the_footprint() {
     let mut first_contact = None;
     for k in 0..600 {
         let o = w.step([1.0, 0.2, 0.0]).unwrap();
-        let exact = w.walls_now().iter().map(|s| footprint_segment_distance(&w.config().robot, o.true_pose, s)).fold(f64::INFINITY, f64::min);
+        let exact = w.walls_now().iter().map(|s| reference_distance(&w.config().robot, o.true_pose, s)).fold(f64::INFINITY, f64::min);
         if o.contacts.any() {
             assert!(exact < 2e-3, "step {k}: rapier contact but the footprint is {exact} m clear");
             first_contact.get_or_insert(k);

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::world::{segments_cross, Point2, Pose2, Segment};
+use crate::world::{Point2, Pose2, Segment};
 
 /// The body outline: a `length × width` rectangle (m, length along the heading) whose corners
 /// are rounded with `corner_radius` (m; 0 for sharp corners). Default: Spot, 1.1 × 0.5 m.
@@ -41,37 +41,11 @@ impl RobotShape {
     }
 }
 
-/// Distance (m) between the footprint at `pose` and the wall `s`; 0 if they touch or overlap.
-///
-/// Exact for the rounded rectangle: the inner rectangle shrunk by `corner_radius` is measured
-/// against the segment, less the radius.
+/// Distance (m) between the footprint at `pose` and the wall `s`; 0 if they touch or overlap
+/// ([`footprint_signed_distance`] of the wall's two ends, clipped at 0).
 pub fn footprint_segment_distance(shape: &RobotShape, pose: Pose2, s: &Segment) -> Real {
-    let r = shape.corner_radius;
-    let (hx, hy) = (0.5 * shape.length - r, 0.5 * shape.width - r);
-    let a = pose.inverse_transform_point(s.a);
-    let b = pose.inverse_transform_point(s.b);
-    let inside = |p: Point2| p[0].abs() <= hx && p[1].abs() <= hy;
-    let corners = [[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]];
-    let crosses = inside(a) || inside(b) || (0..4).any(|k| segments_cross(corners[k], corners[(k + 1) % 4], a, b));
-    if crosses {
-        return 0.0;
-    }
-    // squared distances, one root at the end (no libm `hypot` in this per-step hot path)
-    let to_rect2 = |p: Point2| {
-        let dx = (p[0].abs() - hx).max(0.0);
-        let dy = (p[1].abs() - hy).max(0.0);
-        dx * dx + dy * dy
-    };
-    let e = [b[0] - a[0], b[1] - a[1]];
-    let l2 = e[0] * e[0] + e[1] * e[1];
-    let to_seg2 = |c: Point2| {
-        let w = [c[0] - a[0], c[1] - a[1]];
-        let t = if l2 > 0.0 { ((w[0] * e[0] + w[1] * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
-        let (x, y) = (w[0] - t * e[0], w[1] - t * e[1]);
-        x * x + y * y
-    };
-    let d2 = [to_rect2(a), to_rect2(b)].into_iter().chain(corners.iter().map(|&c| to_seg2(c))).fold(Real::INFINITY, Real::min);
-    (d2.sqrt() - r).max(0.0)
+    let q = [pose.inverse_transform_point(s.a), pose.inverse_transform_point(s.b)];
+    (inner_rect_signed_distance(shape, &q) - shape.corner_radius).max(0.0)
 }
 
 /// Signed distance (m) between the footprint at `pose` and a convex outline `vertices` (world

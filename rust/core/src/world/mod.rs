@@ -22,7 +22,6 @@ pub mod traverse;
 
 pub use contour::simplify_walls;
 pub use geometry::{cross2, norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
-pub(crate) use geometry::segments_cross;
 pub use index::SegmentIndex;
 pub use map::StaticMap;
 pub use moving::{MovingObstacle, Trajectory};
