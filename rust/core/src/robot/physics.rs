@@ -42,10 +42,12 @@ impl ContactReport {
         self.count > 0
     }
 
-    /// Counts a wall (`obstacle` None) or an obstacle at signed distance `d` (m) if it is
-    /// within [`CONTACT_TOLERANCE`].
-    fn tally(&mut self, d: Real, obstacle: Option<usize>) {
+    /// Counts a wall or an obstacle if it is within [`CONTACT_TOLERANCE`] (a distance measured
+    /// that far is exact).
+    fn tally(&mut self, m: Measured) {
+        let (d, obstacle) = (m.d, m.obstacle);
         if d <= CONTACT_TOLERANCE {
+            debug_assert!(m.exact);
             self.count += 1;
             if obstacle.is_none() {
                 self.with_walls += 1;
@@ -70,21 +72,28 @@ pub struct PhysicsScene {
     /// Each obstacle's outline (its own frame) and its pose in the local frame (`f64`).
     obstacle_shapes: Vec<Vec<Point2>>,
     obstacle_poses: Vec<Pose2>,
+    /// Each obstacle's outline's greatest distance from its frame's origin.
+    obstacle_radii: Vec<Real>,
     /// The body-frame velocity the robot achieved in the last step.
     achieved: [Real; 3],
     /// Rapier steps taken.
     substeps: u64,
     scratch: Vec<Point2>,
     /// The distances [`PhysicsScene::step`] measured at its end to every wall that may lie
-    /// within [`NEAR_GROW`] of the footprint and to every obstacle, `(d, obstacle)` as
-    /// [`PhysicsScene::measure`] gives them; `near_valid` while the robot and the obstacles
-    /// are still where they were measured (the next step's start: it reads them instead of
-    /// measuring again).
-    near: Vec<(Real, Option<usize>)>,
+    /// within [`NEAR_GROW`] of the footprint and to every obstacle, as
+    /// [`PhysicsScene::measure`] gives them (an obstacle's a lower bound where it was far);
+    /// `near_valid` while the robot and the obstacles are still where they were measured (the
+    /// next step's start: it reads them instead of measuring again).
+    near: Vec<Measured>,
+    /// How far the robot can close in on a wall and on each obstacle in a step (scratch).
+    closing: Vec<Real>,
     near_valid: bool,
     /// The pose (local frame, `f64`) the robot was placed at, until it moves: the pose reads
     /// exactly as given (`f32` rounding would move it by up to about 1e-6 m).
     placed: Option<Pose2>,
+    /// Far obstacles' bounds the steps had to measure exactly (they might come within reach).
+    #[cfg(test)]
+    bounds_measured: usize,
 }
 
 impl std::fmt::Debug for PhysicsScene {
@@ -173,12 +182,16 @@ impl PhysicsScene {
             walls: local_walls,
             obstacle_shapes: obstacles.iter().map(|o| o.shape.vertices.clone()).collect(),
             obstacle_poses,
+            obstacle_radii: obstacles.iter().map(|o| o.bounding_radius()).collect(),
             achieved: [0.0; 3],
             substeps: 0,
             scratch: Vec::new(),
             near: Vec::new(),
+            closing: Vec::new(),
             near_valid: false,
             placed: Some(Pose2::new(s[0], s[1], wrap_angle(start.yaw))),
+            #[cfg(test)]
+            bounds_measured: 0,
         })
     }
 
@@ -254,21 +267,39 @@ impl PhysicsScene {
         // how far the robot and each thing near enough to meet it can close in (from the
         // distances the last step measured at its end where they reach far enough: the same
         // walls within `grow` are among them, so `need` is the same)
+        let mut closing = std::mem::take(&mut self.closing);
+        closing.clear();
+        closing.push(robot_reach);
+        closing.extend(obstacles.iter().zip(&self.obstacle_radii).map(|(o, &r)| robot_reach + o.travel(t0, t_next, r)));
+        let closing_of = |obstacle: Option<usize>| closing[obstacle.map_or(0, |k| k + 1)];
         let mut need: Real = 0.0;
-        let mut consider = |d: Real, obstacle: Option<usize>| {
-            let closing = robot_reach + obstacle.map_or(0.0, |k| obstacles[k].max_travel(t0, t_next));
-            if d <= closing + PREDICTION_MARGIN {
-                need = need.max(closing);
+        let grow = robot_reach + PREDICTION_MARGIN;
+        let reach = |obstacle: Option<usize>| closing_of(obstacle) + PREDICTION_MARGIN;
+        let mut consider = |m: Measured| {
+            if m.d <= reach(m.obstacle) {
+                need = need.max(closing_of(m.obstacle));
             }
         };
-        let grow = robot_reach + PREDICTION_MARGIN;
         if self.near_valid && grow <= NEAR_GROW {
-            for &(d, obstacle) in &self.near {
-                consider(d, obstacle);
+            let pose = self.local_robot_pose();
+            for i in 0..self.near.len() {
+                let m = self.near[i];
+                // (a far obstacle's bound is measured exactly where the step may reach it)
+                consider(match m.obstacle {
+                    Some(k) if !m.exact && m.d <= reach(m.obstacle) => {
+                        #[cfg(test)]
+                        {
+                            self.bounds_measured += 1;
+                        }
+                        Measured { d: self.obstacle_distance(pose, k), obstacle: Some(k), exact: true }
+                    }
+                    _ => m,
+                });
             }
         } else {
-            self.measure(grow, &mut consider);
+            self.measure(grow, reach, &mut consider);
         }
+        self.closing = closing;
         let n = ((need / SUBSTEP_REACH).ceil() as usize).clamp(1, MAX_SUBSTEPS);
         let h = dt / n as Real;
         let lin = v(c * bx - s * by, s * bx + c * by);
@@ -299,9 +330,9 @@ impl PhysicsScene {
         let mut rep = ContactReport::default();
         let mut near = std::mem::take(&mut self.near);
         near.clear();
-        self.measure(NEAR_GROW, |d, obstacle| {
-            near.push((d, obstacle));
-            rep.tally(d, obstacle);
+        self.measure(NEAR_GROW, |_| CONTACT_TOLERANCE, |m| {
+            near.push(m);
+            rep.tally(m);
         });
         self.near = near;
         self.near_valid = true;
@@ -370,14 +401,15 @@ impl PhysicsScene {
     /// go stale) and every obstacle at its scripted pose.
     pub fn contacts(&mut self) -> ContactReport {
         let mut rep = ContactReport::default();
-        self.measure(0.0, |d, obstacle| rep.tally(d, obstacle));
+        self.measure(0.0, |_| CONTACT_TOLERANCE, |m| rep.tally(m));
         rep
     }
 
-    /// Calls `f(d, obstacle)` with the exact signed distance `d` (m) from the footprint to
-    /// every wall that may lie within `grow` (plus a centimetre) of it (`obstacle` None) and
-    /// to every obstacle at its current pose (`obstacle` its index).
-    fn measure(&mut self, grow: Real, mut f: impl FnMut(Real, Option<usize>)) {
+    /// Calls `f` with the exact signed distance (m) from the footprint to every wall that may
+    /// lie within `grow` (plus a centimetre) of it, and to every obstacle at its current pose
+    /// that may lie within `reach(Some(k))` of it; to an obstacle farther than that, with a
+    /// lower bound of the distance above `reach` (from the two outlines' bounding circles).
+    fn measure(&mut self, grow: Real, reach: impl Fn(Option<usize>) -> Real, mut f: impl FnMut(Measured)) {
         let pose = self.local_robot_pose();
         let shape = self.shape;
         let r = shape.corner_radius;
@@ -393,15 +425,43 @@ impl PhysicsScene {
             let [a, b] = self.walls[co.user_data as usize];
             q.clear();
             q.extend([pose.inverse_transform_point(a), pose.inverse_transform_point(b)]);
-            f(inner_rect_signed_distance(&shape, &q) - r, None);
-        }
-        for (k, (outline, op)) in self.obstacle_shapes.iter().zip(&self.obstacle_poses).enumerate() {
-            q.clear();
-            q.extend(outline.iter().map(|&p| pose.inverse_transform_point(op.transform_point(p))));
-            f(inner_rect_signed_distance(&shape, &q) - r, Some(k));
+            f(Measured { d: inner_rect_signed_distance(&shape, &q) - r, obstacle: None, exact: true });
         }
         self.scratch = q;
+        let robot_radius = 0.5 * shape.length.hypot(shape.width);
+        for k in 0..self.obstacle_shapes.len() {
+            let op = self.obstacle_poses[k];
+            // (the footprint lies within `robot_radius` of its centre, the outline within its
+            // radius of its origin; less a nanometre for rounding)
+            let bound = (op.x - pose.x).hypot(op.y - pose.y) - robot_radius - self.obstacle_radii[k] - 1e-9;
+            if bound > reach(Some(k)) {
+                f(Measured { d: bound, obstacle: Some(k), exact: false });
+            } else {
+                f(Measured { d: self.obstacle_distance(pose, k), obstacle: Some(k), exact: true });
+            }
+        }
     }
+
+    /// The exact signed distance (m) from the footprint at `pose` (local frame) to obstacle `k`
+    /// at its current pose.
+    fn obstacle_distance(&mut self, pose: Pose2, k: usize) -> Real {
+        let op = self.obstacle_poses[k];
+        let mut q = std::mem::take(&mut self.scratch);
+        q.clear();
+        q.extend(self.obstacle_shapes[k].iter().map(|&p| pose.inverse_transform_point(op.transform_point(p))));
+        let d = inner_rect_signed_distance(&self.shape, &q) - self.shape.corner_radius;
+        self.scratch = q;
+        d
+    }
+}
+
+/// A distance [`PhysicsScene::measure`] gives: to a wall (`obstacle` None) or an obstacle, `d`
+/// exact or (`exact` false, a far obstacle) a lower bound.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Measured {
+    d: Real,
+    obstacle: Option<usize>,
+    exact: bool,
 }
 
 /// How far (m) the robot and a wall or obstacle may close in during one rapier step (see
@@ -525,43 +585,63 @@ mod tests {
         assert!(sc.robot_pose().x < -0.5, "the chair pushed the robot back: {:?}", sc.robot_pose());
     }
 
+    /// Steps `cached` (reading the distances the last step measured at its end) and `fresh`
+    /// (measuring afresh) alike for `steps` steps of random commands held `hold` steps, at
+    /// 0.02 s and every third hundred at 0.1 s, and checks that they agree bit for bit.
+    /// Returns how many steps read the distances and how many touched something.
+    fn cached_and_fresh_agree(walls: &[Segment], obstacles: &[MovingObstacle], steps: usize, hold: usize, speed: Real) -> (PhysicsScene, usize, usize) {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut cached = PhysicsScene::new(RobotShape::default(), walls, obstacles, Pose2::default(), 0.0).unwrap();
+        let mut fresh = PhysicsScene::new(RobotShape::default(), walls, obstacles, Pose2::default(), 0.0).unwrap();
+        let (mut t, mut read, mut touching) = (0.0, 0, 0);
+        let mut cmd = [0.0; 3];
+        for k in 0..steps {
+            if k % hold == 0 {
+                cmd = [speed * rng.random_range(-1.6..1.6), speed * rng.random_range(-0.8..0.8), rng.random_range(-1.5..1.5)];
+            }
+            let dt = if (k / 100) % 3 == 2 { 0.1 } else { 0.02 };
+            t += dt;
+            read += cached.near_valid as usize;
+            fresh.near_valid = false;
+            let a = cached.step(cmd, dt, obstacles, t).unwrap();
+            let b = fresh.step(cmd, dt, obstacles, t).unwrap();
+            assert_eq!(a, b, "step {k}");
+            assert_eq!(cached.world.bodies[cached.robot].position(), fresh.world.bodies[fresh.robot].position(), "step {k}");
+            assert_eq!(cached.achieved_velocity(), fresh.achieved_velocity(), "step {k}");
+            touching += a.any() as usize;
+        }
+        assert_eq!(cached.rapier_steps(), fresh.rapier_steps());
+        (cached, read, touching)
+    }
+
     /// The distances a step measures at its end, read by the next step instead of measuring
     /// again, give the same steps bit for bit as measuring afresh: a random drive through a
     /// corridor with a box pushed into it, at 0.02 s (distances read) and 0.1 s (at speed
     /// measured again), splitting steps near the walls.
     #[test]
     fn steps_from_the_last_steps_distances_are_the_steps_measured_afresh() {
-        let walls = corridor();
         let pushed = MovingObstacle {
             name: "box".into(),
             shape: Polygon::rect(-0.3, -0.3, 0.3, 0.3, 1.0),
             trajectory: Trajectory::linear(Pose2::new(8.0, 0.0, 0.0), Pose2::new(1.0, 0.1, 0.5), 2.0, 12.0),
         };
-        let obstacles = [pushed];
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        let mut cached = PhysicsScene::new(RobotShape::default(), &walls, &obstacles, Pose2::default(), 0.0).unwrap();
-        let mut fresh = PhysicsScene::new(RobotShape::default(), &walls, &obstacles, Pose2::default(), 0.0).unwrap();
-        let (mut t, mut steps, mut read, mut touching) = (0.0, 0u64, 0, 0);
-        let mut cmd = [0.0; 3];
-        for k in 0..1500 {
-            if k % 25 == 0 {
-                cmd = [rng.random_range(-1.6..1.6), rng.random_range(-0.8..0.8), rng.random_range(-1.5..1.5)];
-            }
-            let dt = if (k / 100) % 3 == 2 { 0.1 } else { 0.02 };
-            t += dt;
-            read += cached.near_valid as usize;
-            fresh.near_valid = false;
-            let a = cached.step(cmd, dt, &obstacles, t).unwrap();
-            let b = fresh.step(cmd, dt, &obstacles, t).unwrap();
-            assert_eq!(a, b, "step {k}");
-            assert_eq!(cached.world.bodies[cached.robot].position(), fresh.world.bodies[fresh.robot].position(), "step {k}");
-            assert_eq!(cached.achieved_velocity(), fresh.achieved_velocity(), "step {k}");
-            touching += a.any() as usize;
-            steps += 1;
-        }
-        assert_eq!(cached.rapier_steps(), fresh.rapier_steps());
-        assert!(cached.rapier_steps() > steps + 500, "{} rapier steps for {steps}", cached.rapier_steps());
+        let (sc, read, touching) = cached_and_fresh_agree(&corridor(), &[pushed], 1500, 25, 1.0);
+        assert!(sc.rapier_steps() > 1500 + 500, "{} rapier steps for 1500", sc.rapier_steps());
         assert!(read > 1000 && touching > 100, "{read} steps read the distances, {touching} touching");
+    }
+
+    /// Far obstacles are measured by a bound, and exactly where a step may reach them, with the
+    /// same steps as measuring each exactly: a robot dithering about in the open while
+    /// pedestrians circle it at 1.5 m/s, passing within reach and bumping into it.
+    #[test]
+    fn far_obstacles_bounds_give_the_steps_measured_exactly() {
+        let ring = |r: Real, phase: Real| -> Vec<Point2> { (0..=40).map(|i| phase + i as Real * std::f64::consts::PI / 5.0).map(|a| [r * a.cos(), r * a.sin()]).collect() };
+        let walker = |name: &str, path: Vec<Point2>| MovingObstacle { name: name.into(), shape: Polygon::rect(-0.2, -0.25, 0.2, 0.25, 1.8), trajectory: Trajectory::walk(&path, 1.5, 0.0).unwrap() };
+        let obstacles = [walker("near", ring(0.95, 0.0)), walker("passing", ring(1.05, 1.0)), walker("far", ring(3.0, 2.0))];
+        let walls = [Segment::new([-20.0, -20.0], [20.0, -20.0], 2.0)];
+        let (sc, read, touching) = cached_and_fresh_agree(&walls, &obstacles, 1500, 5, 0.1);
+        assert!(read > 1000 && touching > 50, "{read} steps read the distances, {touching} touching");
+        assert!(sc.bounds_measured > 50, "{} bounds measured exactly", sc.bounds_measured);
     }
 
     /// A placed robot reads exactly where it was placed (rapier's `f32` pose is up to about

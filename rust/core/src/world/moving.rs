@@ -137,9 +137,18 @@ impl MovingObstacle {
     /// (moving straight and turning between them, as the physics moves it): the frame's
     /// displacement plus the farthest vertex's radius times the turn.
     pub fn max_travel(&self, t0: Real, t1: Real) -> Real {
+        self.travel(t0, t1, self.bounding_radius())
+    }
+
+    /// [`MovingObstacle::max_travel`] given the obstacle's [`MovingObstacle::bounding_radius`].
+    pub fn travel(&self, t0: Real, t1: Real, radius: Real) -> Real {
         let (a, b) = (self.trajectory.pose_at(t0), self.trajectory.pose_at(t1));
-        let radius = self.shape.vertices.iter().map(|p| p[0].hypot(p[1])).fold(0.0, Real::max);
         (b.x - a.x).hypot(b.y - a.y) + radius * super::wrap_angle(b.yaw - a.yaw).abs()
+    }
+
+    /// The greatest distance (m) of the outline's vertices from the obstacle's frame's origin.
+    pub fn bounding_radius(&self) -> Real {
+        self.shape.vertices.iter().map(|p| p[0].hypot(p[1])).fold(0.0, Real::max)
     }
 
     /// The obstacle's walls in the world frame at time `t`, appended to `out`.
