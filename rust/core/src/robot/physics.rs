@@ -480,8 +480,14 @@ const SOLVER_SUBSTEPS: usize = 1;
 const ALLOWED_LINEAR_ERROR: Real = 0.001;
 /// Added to how far bodies can move in a step for the contacts' prediction (m).
 const PREDICTION_MARGIN: Real = 0.01;
-/// The prediction distance (m) the walls' broad-phase boxes are grown for (by half of it).
-const WALL_PREDICTION: Real = 0.6;
+/// The prediction distance (m) the walls' broad-phase boxes are grown for (by half of it, once).
+/// With the robot's box, grown by half the last rapier step's prediction (at least
+/// [`PREDICTION_MARGIN`]), every wall within a rapier step's prediction is paired with the robot
+/// while that is at most 5.5 cm: for steps closing in by up to `MAX_SUBSTEPS` × 4.5 cm = 2.9 m
+/// (29 m/s at 0.1 s). Before session 24 it was 0.6: the robot driving down a 1.2 m lane was
+/// paired with both walls, and rapier's narrow phase tested them every step (a fifth of a
+/// free step's time).
+const WALL_PREDICTION: Real = 0.1;
 
 #[cfg(test)]
 mod tests {
@@ -548,6 +554,24 @@ mod tests {
         assert!(touched);
         // front at x = p.x + 0.55 must not be (much) beyond the wall at 6
         assert!(p.x + 0.55 < 6.0 + 0.05, "{p:?}");
+    }
+
+    /// Fast robots stop at the end wall: at 4 m/s (0.4 m per 0.1 s step, 40 rapier steps of
+    /// 1 cm) within 1 cm of it; at 8 and 16 m/s (`MAX_SUBSTEPS` rapier steps of 1.25 and 2.5 cm,
+    /// the walls' broad-phase boxes still pairing them with the robot in time) they sink in
+    /// deeper (2.7 and 5.5 cm) but stop.
+    #[test]
+    fn a_fast_robot_stops_at_a_wall() {
+        for (speed, rigid) in [(4.0, 0.01), (8.0, 0.03), (16.0, 0.06)] {
+            let mut sc = PhysicsScene::new(RobotShape::default(), &corridor(), &[], Pose2::new(-4.0, 0.0, 0.0), 0.0).unwrap();
+            let mut deepest: Real = 0.0;
+            for k in 1..=40 {
+                let rep = sc.step([speed, 0.0, 0.0], 0.1, &[], k as Real * 0.1).unwrap();
+                deepest = deepest.max(rep.max_penetration);
+            }
+            let front = sc.robot_pose().x + 0.55;
+            assert!(deepest > 0.0 && deepest < rigid && (front - 6.0).abs() <= deepest + 1e-9, "{speed} m/s: front at {front}, deepest penetration {deepest}");
+        }
     }
 
     #[test]
