@@ -39,6 +39,17 @@ impl RobotShape {
         }
         Ok(())
     }
+
+    /// Half the diagonal (m): every point of the footprint lies within it of the centre.
+    pub fn half_diagonal(&self) -> Real {
+        0.5 * self.length.hypot(self.width)
+    }
+
+    /// How far (m) any point of the footprint can move in `dt` seconds at body velocity
+    /// `(vx, vy, ω)`: its translation plus [`RobotShape::half_diagonal`] times its turn.
+    pub fn step_reach(&self, velocity: [Real; 3], dt: Real) -> Real {
+        (velocity[0].hypot(velocity[1]) + self.half_diagonal() * velocity[2].abs()) * dt
+    }
 }
 
 /// Distance (m) between the footprint at `pose` and the wall `s`; 0 if they touch or overlap

@@ -262,8 +262,7 @@ impl PhysicsScene {
         let (s, c) = yaw.sin_cos();
         let [bx, by, w] = body_velocity;
         let t0 = t_next - dt;
-        let half_diagonal = 0.5 * self.shape.length.hypot(self.shape.width);
-        let robot_reach = (bx.hypot(by) + half_diagonal * w.abs()) * dt;
+        let robot_reach = self.shape.step_reach(body_velocity, dt);
         // how far the robot and each thing near enough to meet it can close in (from the
         // distances the last step measured at its end where they reach far enough: the same
         // walls within `grow` are among them, so `need` is the same)
@@ -428,7 +427,7 @@ impl PhysicsScene {
             f(Measured { d: inner_rect_signed_distance(&shape, &q) - r, obstacle: None, exact: true });
         }
         self.scratch = q;
-        let robot_radius = 0.5 * shape.length.hypot(shape.width);
+        let robot_radius = shape.half_diagonal();
         for k in 0..self.obstacle_shapes.len() {
             let op = self.obstacle_poses[k];
             // (the footprint lies within `robot_radius` of its centre, the outline within its

@@ -172,7 +172,7 @@ impl Scenario {
     /// no polygon or obstacle (whose walls it would then not touch). The error names `start`.
     pub fn check_start(&self, shape: &RobotShape) -> Result<()> {
         let p = self.start;
-        let reach = 0.5 * shape.length.hypot(shape.width);
+        let reach = shape.half_diagonal();
         let at = |what: String| Error::invalid("start", format!("the robot's footprint ({} × {} m) at ({}, {}, yaw {}) {what}", shape.length, shape.width, p.x, p.y, p.yaw));
         let mut moving = Vec::new();
         for o in &self.obstacles {

@@ -376,7 +376,7 @@ impl World {
             return false;
         }
         let shape = self.config.robot;
-        let robot = (velocity[0].hypot(velocity[1]) + 0.5 * shape.length.hypot(shape.width) * velocity[2].abs()) * dt;
+        let robot = shape.step_reach(velocity, dt);
         let obstacles = self.scenario.obstacles.iter().map(|o| o.max_travel(self.time, t_next)).fold(0.0, Real::max);
         clearance > robot + obstacles + FREE_STEP_MARGIN
     }
@@ -384,7 +384,7 @@ impl World {
     fn measure_clearance(&mut self) -> Real {
         let pose = self.physics.robot_pose();
         let shape = self.config.robot;
-        let half_diagonal = 0.5 * shape.length.hypot(shape.width);
+        let half_diagonal = shape.half_diagonal();
         let moving = {
             self.moving_now.clear();
             for o in &self.scenario.obstacles {
@@ -469,7 +469,7 @@ impl World {
 /// the answer from above, and only walls whose centre distance is below that bound plus
 /// `half_diagonal − inner` need the exact footprint test (compared squared: no root).
 fn pruned_footprint_distance(shape: &RobotShape, pose: Pose2, walls: &[Segment], c2: &mut Vec<Real>) -> Real {
-    let half_diagonal = 0.5 * shape.length.hypot(shape.width);
+    let half_diagonal = shape.half_diagonal();
     let inner = 0.5 * shape.length.min(shape.width);
     let centre = [pose.x, pose.y];
     c2.clear();
