@@ -311,6 +311,31 @@ fn walls_are_rigid_at_any_control_period() {
     assert!(report.iter().all(|r| r.1 <= RIGID));
 }
 
+/// Pinned in a corner: random commands (held 0.5 s each) that pressed the robot into the
+/// doorway's corner of `constricted_passage`, touching both walls, at 0.01 s steps. There
+/// parry once gave the wall along the robot's top a contact 10.1 m deep, with the wall's
+/// direction as its normal, and the solver threw the robot 2.1 cm into that wall in one step;
+/// such contacts are now dropped (`MAX_CONTACT_DEPTH`).
+#[test]
+fn walls_stay_rigid_with_the_robot_pinned_in_a_corner() {
+    let dt = 0.01;
+    let mut world = World::from_preset("constricted_passage", WorldConfig { dt, ..Default::default() }).unwrap();
+    let shape = world.config().robot;
+    let mut rng = ChaCha8Rng::seed_from_u64(18 * 7919 + dt.to_bits());
+    let (mut cmd, mut worst, mut cornered): ([f64; 3], f64, usize) = ([0.0; 3], 0.0, 0);
+    for k in 0..2800 {
+        if k % 50 == 0 {
+            cmd = [rng.random_range(-1.6..1.6), rng.random_range(-0.8..0.8), rng.random_range(-1.5..1.5)];
+        }
+        let o = world.step(cmd).unwrap();
+        let p = penetration(&shape, o.true_pose, &world.walls_now());
+        worst = worst.max(p);
+        // (the doorway's corner: the walls x = 0 and y = 1.5 both touching)
+        cornered += (o.contacts.with_walls >= 2 && (o.true_pose.x - 0.55).abs() < 0.01 && (o.true_pose.y - 1.25).abs() < 0.01) as usize;
+    }
+    assert!(cornered > 5 && worst <= RIGID, "{cornered} steps in the corner, deepest {worst} m");
+}
+
 /// Without the tracker: the body driven straight at the commands, into the walls.
 #[test]
 fn walls_are_rigid_for_the_bare_body() {
