@@ -63,6 +63,8 @@ impl ContactReport {
 pub struct PhysicsScene {
     world: PhysicsWorld,
     robot: RigidBodyHandle,
+    /// The robot's collider.
+    robot_collider: ColliderHandle,
     obstacles: Vec<RigidBodyHandle>,
     shape: RobotShape,
     /// The world-frame point at rapier's origin.
@@ -167,7 +169,7 @@ impl PhysicsScene {
         let s = local([start.x, start.y]);
         let body = RigidBodyBuilder::dynamic().translation(v(s[0], s[1])).rotation(start.yaw as f32).can_sleep(false);
         // Spot's mass: ~32 kg over 0.55 m²
-        let (robot, _) = world.insert(body, collider.density(58.0).friction(0.0).active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS));
+        let (robot, robot_collider) = world.insert(body, collider.density(58.0).friction(0.0).active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS));
         // a step of no time fills the broad phase (so that contacts can be measured at once);
         // the walls' boxes there are grown by half this prediction distance, for good
         world.integration_parameters.normalized_prediction_distance = WALL_PREDICTION as f32;
@@ -176,6 +178,7 @@ impl PhysicsScene {
         Ok(Self {
             world,
             robot,
+            robot_collider,
             obstacles: handles,
             shape,
             origin,
@@ -300,6 +303,9 @@ impl PhysicsScene {
         }
         self.closing = closing;
         let n = ((need / SUBSTEP_REACH).ceil() as usize).clamp(1, MAX_SUBSTEPS);
+        // (more solver sweeps while the footprint is in a wall deeper than the slop: the
+        // last step's end, then each rapier step's contacts)
+        let mut deep = self.near_valid && self.near.iter().any(|m| m.d < -DEEP_CONTACT);
         let h = dt / n as Real;
         let lin = v(c * bx - s * by, s * bx + c * by);
         self.world.integration_parameters.dt = h as f32;
@@ -314,7 +320,11 @@ impl PhysicsScene {
                 self.obstacle_poses[k] = p;
                 self.world.bodies[self.obstacles[k]].set_next_kinematic_position(rapier2d::math::Pose::new(v(p.x, p.y), p.yaw as f32));
             }
+            self.world.integration_parameters.num_internal_pgs_iterations = if deep { DEEP_PGS_ITERATIONS } else { 1 };
             self.world.step_with_events(&ImplausibleContacts, &());
+            if i < n && !deep {
+                deep = self.world.narrow_phase.contact_pairs_with(self.robot_collider).any(|c| c.manifolds().iter().any(|m| m.points.iter().any(|p| p.dist < -DEEP_CONTACT as f32)));
+            }
         }
         self.placed = None;
         self.substeps += n as u64;
@@ -496,6 +506,11 @@ const MAX_SUBSTEPS: usize = 64;
 /// Solver substeps per rapier step: one (the steps near walls are split already; with two,
 /// penetrations under a random stress test were up to 1.3 cm, with one 0.7 cm).
 const SOLVER_SUBSTEPS: usize = 1;
+/// A penetration (m) past which the solver sweeps the contacts [`DEEP_PGS_ITERATIONS`] times
+/// instead of once.
+const DEEP_CONTACT: Real = 0.004;
+/// See [`DEEP_CONTACT`].
+const DEEP_PGS_ITERATIONS: usize = 4;
 /// Rapier's slop (m).
 const ALLOWED_LINEAR_ERROR: Real = 0.001;
 /// Added to how far bodies can move in a step for the contacts' prediction (m).
