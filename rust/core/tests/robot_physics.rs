@@ -318,22 +318,34 @@ fn walls_are_rigid_at_any_control_period() {
 /// such contacts are now dropped (`MAX_CONTACT_DEPTH`).
 #[test]
 fn walls_stay_rigid_with_the_robot_pinned_in_a_corner() {
-    let dt = 0.01;
-    let mut world = World::from_preset("constricted_passage", WorldConfig { dt, ..Default::default() }).unwrap();
+    let mut world = World::from_preset("constricted_passage", WorldConfig { dt: 0.01, ..Default::default() }).unwrap();
+    let (mut worst, mut cornered): (f64, usize) = (0.0, 0);
+    drive_at_random(&mut world, 18, 2800, |o, p| {
+        worst = worst.max(p);
+        // (the doorway's corner: the walls x = 0 and y = 1.5 both touching)
+        cornered += (o.contacts.with_walls >= 2 && (o.true_pose.x - 0.55).abs() < 0.01 && (o.true_pose.y - 1.25).abs() < 0.01) as usize;
+    });
+    assert!(cornered > 5 && worst <= RIGID, "{cornered} steps in the corner, deepest {worst} m");
+}
+
+/// Steps `world` `steps` times at random commands (seeded by `seed` and the control period,
+/// each held 0.5 s), calling `each` with every step's outcome and the footprint's deepest
+/// penetration into the walls after it (checked against the step's contact report).
+fn drive_at_random(world: &mut World, seed: u64, steps: usize, mut each: impl FnMut(&shieldnav_core::world::StepOutcome, f64)) {
+    let dt = world.config().dt;
     let shape = world.config().robot;
-    let mut rng = ChaCha8Rng::seed_from_u64(18 * 7919 + dt.to_bits());
-    let (mut cmd, mut worst, mut cornered): ([f64; 3], f64, usize) = ([0.0; 3], 0.0, 0);
-    for k in 0..2800 {
-        if k % 50 == 0 {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed * 7919 + dt.to_bits());
+    let hold = (0.5 / dt).round() as usize;
+    let mut cmd = [0.0; 3];
+    for k in 0..steps {
+        if k % hold == 0 {
             cmd = [rng.random_range(-1.6..1.6), rng.random_range(-0.8..0.8), rng.random_range(-1.5..1.5)];
         }
         let o = world.step(cmd).unwrap();
         let p = penetration(&shape, o.true_pose, &world.walls_now());
-        worst = worst.max(p);
-        // (the doorway's corner: the walls x = 0 and y = 1.5 both touching)
-        cornered += (o.contacts.with_walls >= 2 && (o.true_pose.x - 0.55).abs() < 0.01 && (o.true_pose.y - 1.25).abs() < 0.01) as usize;
+        assert!((p - o.contacts.max_penetration).abs() < 1e-9, "{p} vs {:?}", o.contacts);
+        each(&o, p);
     }
-    assert!(cornered > 5 && worst <= RIGID, "{cornered} steps in the corner, deepest {worst} m");
 }
 
 /// Jammed: random commands (held 0.5 s each) at 0.1 s steps that wedge the robot, turning at
@@ -348,21 +360,13 @@ fn walls_stay_rigid_with_the_robot_jammed_between_them() {
         eprintln!("SKIPPED: {} is absent (the shared maps folder beside the repository)", yaml.display());
         return;
     }
-    let dt = 0.1;
-    let mut world = World::from_ros_map(&yaml, &shieldnav_core::world::RosMapOptions::default(), WorldConfig { dt, ..Default::default() }).unwrap();
-    let shape = world.config().robot;
-    let mut rng = ChaCha8Rng::seed_from_u64(10 * 7919 + dt.to_bits());
-    let (mut cmd, mut worst, mut jammed): ([f64; 3], f64, usize) = ([0.0; 3], 0.0, 0);
-    for k in 0..280 {
-        if k % 5 == 0 {
-            cmd = [rng.random_range(-1.6..1.6), rng.random_range(-0.8..0.8), rng.random_range(-1.5..1.5)];
-        }
-        let o = world.step(cmd).unwrap();
-        let p = penetration(&shape, o.true_pose, &world.walls_now());
+    let mut world = World::from_ros_map(&yaml, &shieldnav_core::world::RosMapOptions::default(), WorldConfig { dt: 0.1, ..Default::default() }).unwrap();
+    let (mut worst, mut jammed): (f64, usize) = (0.0, 0);
+    drive_at_random(&mut world, 10, 280, |o, p| {
         worst = worst.max(p);
         // (in the gap by the obstacle at (7.9, 4.8), touching walls on both sides, deep)
         jammed += (o.contacts.with_walls >= 2 && p > 0.004 && (o.true_pose.x - 7.6).abs() < 0.1 && (o.true_pose.y - 5.0).abs() < 0.1) as usize;
-    }
+    });
     assert!(jammed > 0 && worst <= RIGID, "{jammed} steps jammed, deepest {worst} m");
 }
 
