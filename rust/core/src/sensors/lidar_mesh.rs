@@ -619,6 +619,10 @@ impl Lidar {
             // out through the edges from corner e + 1 round to corner e: each takes the beams
             // up to (clockwise of) its far corner
             let (mut lo, j1) = (win.j0 as i64, win.j1 as i64);
+            if j1 - lo == 1 {
+                cur = w.one_beam(cs, at, e, &win, recast, sweeps).or_else(|| stack.pop());
+                continue;
+            }
             let mut from = win.pu;
             let mut i = if e + 1 == k { 0 } else { e + 1 };
             let mut next: Option<Window> = None;
@@ -1032,6 +1036,40 @@ impl Walker<'_> {
         };
         self.near(p, m, recast);
         m
+    }
+
+    /// The walk of a window of one beam (`win`, into the cell of corners `cs`, the first at
+    /// `at`, through its edge `e`): out through the edge whose far corner the beam passes
+    /// clockwise of, the beam marked for recasting if it passes near a corner tested, as the
+    /// edges one by one find it (see [`Lidar::walk`]), with one test per corner instead of
+    /// [`Walker::split`]'s two. A third of the windows entering cells on the atrium of
+    /// `ut_gdc_floor2` at 20 m are of one beam; the scan there took 1–2 % less.
+    #[inline(always)]
+    fn one_beam(&self, cs: &[[Real; 2]], at: usize, e: usize, win: &Window, recast: &mut Vec<u32>, sweeps: &mut Vec<Sweep>) -> Option<Window> {
+        let k = cs.len();
+        let j = win.j0 as i64;
+        let b = (j & self.mask) as usize;
+        // SAFETY: the beam tables hold `mask + 1` beams (`Lidar::new`)
+        let (sin, cos) = unsafe { (*self.lidar.az_sin.get_unchecked(b), *self.lidar.az_cos.get_unchecked(b)) };
+        let mut from = win.pu;
+        let mut i = if e + 1 == k { 0 } else { e + 1 };
+        loop {
+            let i1 = if i + 1 == k { 0 } else { i + 1 };
+            if i1 == e {
+                return self.edge(at + i, from, win.pv, j, j + 1, sweeps);
+            }
+            // SAFETY: `i1 < k`, a corner of the cell
+            let to = self.frame(unsafe { *cs.get_unchecked(i1) });
+            // (as `Walker::side`)
+            let side = to[0] * sin - to[1] * cos;
+            if side.abs() <= NEAR {
+                mark(recast, b as u32, NONE);
+            }
+            if side < 0.0 {
+                return self.edge(at + i, from, to, j, j + 1, sweeps);
+            }
+            (from, i) = (to, i1);
+        }
     }
 
     /// The beams `j0..j1` crossing the corner edge `g` (see [`ScanMesh::link`]; its ends `p`,
