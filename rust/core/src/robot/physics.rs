@@ -12,6 +12,8 @@
 //! near the footprint, every obstacle is measured; touching within [`CONTACT_TOLERANCE`]
 //! counts (see [`PhysicsScene::contacts`]).
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use rapier2d::prelude::*;
 
 use super::footprint::{inner_rect_signed_distance, RobotShape};
@@ -63,8 +65,10 @@ impl ContactReport {
 pub struct PhysicsScene {
     world: PhysicsWorld,
     robot: RigidBodyHandle,
-    /// The robot's collider.
-    robot_collider: ColliderHandle,
+    /// Rapier's hook on the robot's contacts (see [`ContactGuard`]).
+    guard: ContactGuard,
+    /// The footprint's deepest penetration (m) at the last step's end (valid with `near`).
+    deepest: Real,
     obstacles: Vec<RigidBodyHandle>,
     shape: RobotShape,
     /// The world-frame point at rapier's origin.
@@ -169,7 +173,7 @@ impl PhysicsScene {
         let s = local([start.x, start.y]);
         let body = RigidBodyBuilder::dynamic().translation(v(s[0], s[1])).rotation(start.yaw as f32).can_sleep(false);
         // Spot's mass: ~32 kg over 0.55 m²
-        let (robot, robot_collider) = world.insert(body, collider.density(58.0).friction(0.0).active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS));
+        let (robot, _) = world.insert(body, collider.density(58.0).friction(0.0).active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS));
         // a step of no time fills the broad phase (so that contacts can be measured at once);
         // the walls' boxes there are grown by half this prediction distance, for good
         world.integration_parameters.normalized_prediction_distance = WALL_PREDICTION as f32;
@@ -178,7 +182,8 @@ impl PhysicsScene {
         Ok(Self {
             world,
             robot,
-            robot_collider,
+            guard: ContactGuard::default(),
+            deepest: 0.0,
             obstacles: handles,
             shape,
             origin,
@@ -303,9 +308,9 @@ impl PhysicsScene {
         }
         self.closing = closing;
         let n = ((need / SUBSTEP_REACH).ceil() as usize).clamp(1, MAX_SUBSTEPS);
-        // (more solver sweeps while the footprint is in a wall deeper than the slop: the
-        // last step's end, then each rapier step's contacts)
-        let mut deep = self.near_valid && self.near.iter().any(|m| m.d < -DEEP_CONTACT);
+        // (more solver sweeps while the footprint is in a wall deeper than the slop: at the
+        // last step's end, then in the contacts of each rapier step)
+        let mut deep = self.near_valid && self.deepest > DEEP_CONTACT;
         let h = dt / n as Real;
         let lin = v(c * bx - s * by, s * bx + c * by);
         self.world.integration_parameters.dt = h as f32;
@@ -321,10 +326,9 @@ impl PhysicsScene {
                 self.world.bodies[self.obstacles[k]].set_next_kinematic_position(rapier2d::math::Pose::new(v(p.x, p.y), p.yaw as f32));
             }
             self.world.integration_parameters.num_internal_pgs_iterations = if deep { DEEP_PGS_ITERATIONS } else { 1 };
-            self.world.step_with_events(&ImplausibleContacts, &());
-            if i < n && !deep {
-                deep = self.world.narrow_phase.contact_pairs_with(self.robot_collider).any(|c| c.manifolds().iter().any(|m| m.points.iter().any(|p| p.dist < -DEEP_CONTACT as f32)));
-            }
+            self.guard.deepest.store(0.0f32.to_bits(), Ordering::Relaxed);
+            self.world.step_with_events(&self.guard, &());
+            deep |= f32::from_bits(self.guard.deepest.load(Ordering::Relaxed)) as Real > DEEP_CONTACT;
         }
         self.placed = None;
         self.substeps += n as u64;
@@ -345,6 +349,7 @@ impl PhysicsScene {
         });
         self.near = near;
         self.near_valid = true;
+        self.deepest = rep.max_penetration;
         Ok(rep)
     }
 
@@ -464,23 +469,31 @@ impl PhysicsScene {
     }
 }
 
-/// Rapier's physics hook that drops the robot's solver contacts deeper than
-/// [`MAX_CONTACT_DEPTH`]: no step sinks the robot that far, but parry can report such a contact
-/// where a corner of the footprint touches a wall's end exactly (seen in a concave corner of
-/// walls: the manifold of the wall along which the robot lay had the wall's direction as its
-/// normal and a point 10.1 m deep, and the solver's correction threw the robot 1.9 cm sideways
-/// and 2.2° round in one 0.01 s step, 2.1 cm into the other wall).
-struct ImplausibleContacts;
+/// Rapier's physics hook on the robot's solver contacts, in one pass over them: it drops those
+/// deeper than [`MAX_CONTACT_DEPTH`], and keeps the deepest penetration of the others in
+/// `deepest` (`f32` bits, which order non-negative values as the values; reset before each
+/// rapier step, see [`DEEP_CONTACT`]). No step sinks
+/// the robot 20 cm, but parry can report such a contact where a corner of the footprint touches
+/// a wall's end exactly (seen in a concave corner of walls: the manifold of the wall along
+/// which the robot lay had the wall's direction as its normal and a point 10.1 m deep, and the
+/// solver's correction threw the robot 1.9 cm sideways and 2.2° round in one 0.01 s step,
+/// 2.1 cm into the other wall).
+#[derive(Debug, Default)]
+struct ContactGuard {
+    deepest: AtomicU32,
+}
 
-impl PhysicsHooks for ImplausibleContacts {
+impl PhysicsHooks for ContactGuard {
     fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
         if let Some(m) = context.rigid_mut() {
             m.solver_contacts.retain(|c| c.dist >= -MAX_CONTACT_DEPTH as f32);
+            let deepest = m.solver_contacts.iter().fold(0.0f32, |d, c| d.max(-c.dist));
+            self.deepest.fetch_max(deepest.to_bits(), Ordering::Relaxed);
         }
     }
 }
 
-/// The deepest solver contact (m) rapier's solver is given (see [`ImplausibleContacts`]): far
+/// The deepest solver contact (m) rapier's solver is given (see [`ContactGuard`]): far
 /// beyond the depths steps reach (about a centimetre; 5.5 cm for a robot driving into a wall
 /// at 16 m/s, see `a_fast_robot_stops_at_a_wall`), far below those of the contacts dropped.
 const MAX_CONTACT_DEPTH: Real = 0.2;
