@@ -477,4 +477,3 @@ fn every_touching_step_is_a_contact() {
     }
     assert!(touching > 2000, "{touching} touching steps");
 }
-

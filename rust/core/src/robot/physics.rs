@@ -326,9 +326,9 @@ impl PhysicsScene {
         let lin = v(c * bx - s * by, s * bx + c * by);
         // (more solver sweeps while the footprint is in a wall deeper than the slop: at the
         // last step's end, then in the contacts of each rapier step)
-        let deep = self.near_valid && self.deepest > DEEP_CONTACT;
-        let start = (*self.world.bodies[self.robot].position(), self.placed);
         let start_deepest = if self.near_valid { self.deepest } else { 0.0 };
+        let deep = start_deepest > DEEP_CONTACT;
+        let start = (*self.world.bodies[self.robot].position(), self.placed);
         if n > 1 && n <= self.coarse_split && !deep {
             // one rapier step, its solver substepped as the split would be, kept if the
             // footprint ends no deeper than `DEEP_CONTACT` (see `COARSE_SPLIT`)
@@ -392,8 +392,13 @@ impl PhysicsScene {
     fn restore(&mut self, start: (rapier2d::math::Pose, Option<Pose2>), obstacles: &[MovingObstacle], t0: Real) {
         self.world.bodies[self.robot].set_position(start.0, true);
         self.placed = start.1;
+        self.place_obstacles(obstacles, t0);
+    }
+
+    /// Puts each obstacle at its scripted pose at time `t` (no physics).
+    fn place_obstacles(&mut self, obstacles: &[MovingObstacle], t: Real) {
         for (k, o) in obstacles.iter().enumerate() {
-            let p = self.obstacle_local_pose(o, t0);
+            let p = self.obstacle_local_pose(o, t);
             self.obstacle_poses[k] = p;
             self.world.bodies[self.obstacles[k]].set_position(rapier2d::math::Pose::new(v(p.x, p.y), p.yaw as f32), true);
         }
@@ -489,11 +494,7 @@ impl PhysicsScene {
         }
         rb.set_position(pose, true);
         self.placed = None;
-        for (k, o) in obstacles.iter().enumerate() {
-            let p = self.obstacle_local_pose(o, t_next);
-            self.obstacle_poses[k] = p;
-            self.world.bodies[self.obstacles[k]].set_position(rapier2d::math::Pose::new(v(p.x, p.y), p.yaw as f32), true);
-        }
+        self.place_obstacles(obstacles, t_next);
         self.achieved = body_velocity;
         self.near_valid = false;
         Ok(ContactReport::default())
