@@ -123,11 +123,12 @@ def test_info_keys_and_cost_convention():
 
 
 def test_step_applies_the_shield_to_the_current_scan():
-    """The env's u* is exactly the standalone Shield's on the same body-frame points."""
+    """The env's u* is exactly the standalone braking Shield's on the same body-frame points
+    and body velocity."""
     env = gym.make("shieldnav/DynamicObstacles-v0")
     env.reset(seed=0)
     ep = env.unwrapped.episode
-    shield = Shield(u_max=list(env.unwrapped.config["v_max"]))
+    shield = Shield(method="braking", u_max=list(env.unwrapped.config["v_max"]))
     for k in range(400):
         action = np.array([1.0, 0.6 * np.sin(0.05 * k), 0.3], np.float32)
         points = ep.shield_points()
@@ -141,11 +142,11 @@ def test_step_applies_the_shield_to_the_current_scan():
         assert len(mine) == len(inside)
         np.testing.assert_allclose(np.sort(mine, axis=0), np.sort(inside, axis=0), rtol=0, atol=2e-5)
         u_nom = np.array([1.6 * float(action[0]), 0.8 * float(action[1])])
-        expected = shield.filter(points, u_nom, yaw=0.0, omega=1.5 * float(action[2]))
+        expected = shield.filter(points, u_nom, yaw=0.0, omega=1.5 * float(action[2]), velocity=ep.velocity)
         _, _, _, _, info = env.step(action)
         assert info["H"] == expected.H and info["h_min"] == expected.h_min
-        if expected.feasible:
-            np.testing.assert_array_equal(info["u_filtered"][:2], expected.u)
+        np.testing.assert_array_equal(info["u_filtered"], [*expected.u, expected.omega])
+        assert info["shield_braked"] == expected.braked and info["shield_recovering"] == expected.recovering
         assert info["intervention"] == pytest.approx(np.hypot(*(info["u_filtered"][:2] - info["u_nom"][:2])))
 
 
@@ -269,7 +270,7 @@ def test_defaults_are_the_papers():
     assert d["crop_radius"] == 3.5 and d["safety_distance"] == 0.8 and d["kp"] == 4.0
     assert d["d_view"] == 1.5 and d["gamma_h"] == 0.5 and np.degrees(d["fov_h"]) == pytest.approx(69.4)
     assert d["dt"] == 0.02 and d["lidar_rate_hz"] == 10.0 and d["lidar_columns"] == 1024
-    assert d["shield"] == "composite" and d["terminate_on_contact"] is False
+    assert d["shield"] == "braking" and d["terminate_on_contact"] is False
     # one source of truth: the mirror cannot be changed behind the core's back
     with pytest.raises(TypeError):
         d["kappa"] = 12.0  # type: ignore[index]

@@ -44,6 +44,14 @@ class ShieldOutcome:
     def feasible(self) -> bool: ...
     @property
     def solve_time_ns(self) -> int: ...
+    @property
+    def omega(self) -> float | npt.NDArray[np.float64]: ...
+    @property
+    def braked(self) -> bool: ...
+    @property
+    def recovering(self) -> bool: ...
+    @property
+    def sweep_h(self) -> float: ...
 
 @final
 class Shield:
@@ -63,6 +71,12 @@ class Shield:
         voxel_size: float | None = ...,
         angular_bins: int | None = ...,
         grad_eps: float = ...,
+        tracker_tau: float = ...,
+        a_max: Sequence[float] = ...,
+        w_max: float = ...,
+        yaw_accel_max: float = ...,
+        dt: float = ...,
+        brake_margin: float = ...,
     ) -> Shield: ...
     def filter(
         self,
@@ -73,6 +87,7 @@ class Shield:
         rotation: npt.ArrayLike | None = None,
         extra_A: npt.NDArray[np.float64] | None = None,
         extra_b: _Vec | None = None,
+        velocity: _Vec | None = None,
     ) -> ShieldOutcome: ...
     def filter_world(
         self,
@@ -84,6 +99,7 @@ class Shield:
         rotation: npt.ArrayLike | None = None,
         extra_A: npt.NDArray[np.float64] | None = None,
         extra_b: _Vec | None = None,
+        velocity: _Vec | None = None,
     ) -> ShieldOutcome: ...
     @property
     def config(self) -> dict[str, Any]: ...
@@ -232,6 +248,8 @@ class Episode:
     def time(self) -> float: ...
     @property
     def true_pose(self) -> _Pose3: ...
+    @property
+    def velocity(self) -> _Pose3: ...
     @property
     def estimated_pose(self) -> _Pose3: ...
     @property

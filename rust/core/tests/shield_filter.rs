@@ -305,7 +305,7 @@ fn distance_baseline_stops_for_a_point_at_the_centre() {
 #[test]
 fn public_qp_functions_name_bad_arguments() {
     let err = |r: shieldnav_core::Result<_>| r.map(|_: shieldnav_core::shield::QpSolution| ()).unwrap_err().to_string();
-    assert!(err(project_halfspace_box(&[1.0; 4], &[1.0; 4], 0.0, None, 1e-9)).contains("u_nom"));
+    assert!(err(project_halfspace_box(&[1.0; 7], &[1.0; 7], 0.0, None, 1e-9)).contains("u_nom"));
     assert!(err(project_halfspace_box(&[1.0, 0.0], &[1.0], 0.0, None, 1e-9)).contains("`g`"));
     assert!(err(project_halfspace_box(&[1.0, 0.0], &[1.0, 0.0], 0.0, Some(&[1.0]), 1e-9)).contains("u_max"));
     assert!(err(project_halfspace_box(&[1.0, 0.0], &[1.0, 0.0], 0.0, Some(&[-1.0, 1.0]), 1e-9)).contains("u_max"));
@@ -315,7 +315,7 @@ fn public_qp_functions_name_bad_arguments() {
     assert!(rows.push(&[1.0, f64::NAN], 0.0).is_err() && rows.is_empty());
     rows.push(&[1.0, 0.0], 0.5).unwrap();
     assert!(rows.extend(&LinearConstraints::new(3)).is_err());
-    assert!(err(solve_rows(&[1.0; 4], &rows, None)).contains("u_nom"));
+    assert!(err(solve_rows(&[1.0; 7], &rows, None)).contains("u_nom"));
     assert!(err(solve_rows(&[f64::NAN, 0.0], &rows, None)).contains("u_nom"));
     assert!(err(solve_rows(&[1.0, 0.0], &rows, Some(&[1.0]))).contains("u_max"));
     let u = solve_rows(&[0.0, 0.0], &rows, None).unwrap().u;
@@ -351,4 +351,93 @@ fn empty_scan_is_valid_and_leaves_the_command() {
         assert!(o.feasible && !o.active && o.num_points == 0);
         assert!(o.value.is_finite() && o.h_min.is_finite());
     }
+}
+
+/// The closed form in 3 and 6 variables (the planar and 3D velocity with the rotation): the
+/// KKT point `u = clamp(u_nom + μ g)`, `μ ≥ 0`, on the row when active, and Clarabel's optimum.
+#[test]
+fn closed_form_is_the_kkt_point_in_three_and_six_variables() {
+    let mut g = rng(33);
+    let mut checked = 0;
+    for trial in 0..400 {
+        let d = if trial % 2 == 0 { 3 } else { 6 };
+        let u_nom: Vec<f64> = (0..d).map(|_| g.random_range(-2.0..2.0)).collect();
+        let row: Vec<f64> = (0..d).map(|_| g.random_range(-3.0..3.0)).collect();
+        let b = g.random_range(-2.0..4.0);
+        let m: Vec<f64> = (0..d).map(|_| g.random_range(0.3..1.5)).collect();
+        let fast = project_halfspace_box(&u_nom, &row, b, Some(&m), 1e-12).unwrap();
+        let mut rows = LinearConstraints::new(d);
+        rows.push(&row, b).unwrap();
+        let slow = solve_rows(&u_nom, &rows, Some(&m)).unwrap();
+        assert_eq!(fast.feasible, slow.feasible, "trial {trial}");
+        if !fast.feasible {
+            continue;
+        }
+        for j in 0..d {
+            assert!((fast.u[j] - slow.u[j]).abs() < 1e-6, "trial {trial}: {:?} vs {:?}", &fast.u[..d], &slow.u[..d]);
+            assert!(fast.u[j].abs() <= m[j] + 1e-12);
+        }
+        let gu: f64 = (0..d).map(|j| row[j] * fast.u[j]).sum();
+        if !fast.active {
+            assert!(gu >= b && (0..d).all(|j| fast.u[j] == u_nom[j].clamp(-m[j], m[j])));
+            continue;
+        }
+        assert!((gu - b).abs() < 1e-9, "trial {trial}: an active row holds with equality ({gu} vs {b})");
+        // μ from a component strictly inside its box, then every component must follow it
+        let free = (0..d).find(|&j| fast.u[j].abs() < m[j] - 1e-9 && row[j].abs() > 1e-6);
+        let Some(j) = free else { continue };
+        let mu = (fast.u[j] - u_nom[j]) / row[j];
+        assert!(mu >= -1e-9, "trial {trial}: μ = {mu}");
+        for k in 0..d {
+            let want = (u_nom[k] + mu * row[k]).clamp(-m[k], m[k]);
+            assert!((fast.u[k] - want).abs() < 1e-9, "trial {trial}: component {k}: {} vs {want}", fast.u[k]);
+        }
+        checked += 1;
+    }
+    assert!(checked > 100, "{checked}");
+}
+
+/// The braking shield's rotation row: a point ahead and to the left, the robot asked to turn
+/// left (its nose toward the point) is slowed; asked to turn right, it is left alone. The
+/// coefficient of ω is the derivative of `H` under the turn, by central differences.
+#[test]
+fn the_rotation_row_has_the_turns_sign() {
+    let pts = [0.65, 0.36];
+    let mut sh = Shield::new(ShieldConfig { method: ShieldMethod::Braking, ..ShieldConfig::default() }).unwrap();
+    let scan = Scan::new_f64(&pts, 2).unwrap();
+    let st = |w: f64| BodyState::planar(0.0, w).unwrap().with_velocity([0.0; 3]).unwrap();
+    let left = sh.filter(&scan, &st(1.5), &[0.0, 0.0]).unwrap();
+    let right = sh.filter(&scan, &st(-1.5), &[0.0, 0.0]).unwrap();
+    assert!(left.active && left.omega[2] < 1.5, "{left:?}");
+    assert!(!right.active && right.omega[2] == -1.5, "{right:?}");
+    // dH/dt = coefficient · ω: compare with H of the scan turned by ∓δ (the body turned by ±δ)
+    let mut paper = shield(ShieldMethod::Composite);
+    let mut h = |yaw: f64| {
+        let (s, c) = (-yaw).sin_cos();
+        let p = [c * pts[0] - s * pts[1], s * pts[0] + c * pts[1]];
+        paper.barrier(&Scan::new_f64(&p, 2).unwrap(), &st(0.0)).unwrap().value
+    };
+    let d = 1e-6;
+    let fd = (h(d) - h(-d)) / (2.0 * d);
+    let coef = paper.barrier(&scan, &st(0.0)).unwrap().grad_omega[2];
+    assert!(fd < 0.0 && (coef - fd).abs() < 1e-6 * fd.abs().max(1.0), "{coef} vs {fd}");
+}
+
+/// Bad inputs of the braking shield name what was wrong.
+#[test]
+fn braking_inputs_name_the_argument() {
+    use shieldnav_core::shield::BrakingModel;
+    let bad = |b: BrakingModel| Shield::new(ShieldConfig { method: ShieldMethod::Braking, braking: b, ..ShieldConfig::default() }).unwrap_err().to_string();
+    let d = BrakingModel::default();
+    assert!(bad(BrakingModel { dt: 0.0, ..d }).contains("dt"));
+    assert!(bad(BrakingModel { dt: f64::NAN, ..d }).contains("dt"));
+    assert!(bad(BrakingModel { margin: -0.1, ..d }).contains("margin"));
+    let mut t = d.tracker;
+    t.alpha_max = 0.0;
+    assert!(bad(BrakingModel { tracker: t, ..d }).contains("yaw_accel_max"));
+    let mut sh = Shield::new(ShieldConfig { method: ShieldMethod::Braking, ..ShieldConfig::default() }).unwrap();
+    let scan = Scan::new_f64(&[1.0, 0.5], 2).unwrap();
+    let err = sh.filter(&scan, &BodyState::planar(0.0, 0.0).unwrap(), &[0.5, 0.0]).unwrap_err().to_string();
+    assert!(err.contains("velocity"), "{err}");
+    assert!(BodyState::planar(0.0, 0.0).unwrap().with_velocity([f64::NAN, 0.0, 0.0]).unwrap_err().to_string().contains("velocity"));
 }

@@ -113,6 +113,8 @@ impl PyBatch {
         info.set_item("h_min", col(&|s| s.report.h_min))?;
         info.set_item("shield_active", flag(&|s| s.report.shield_active))?;
         info.set_item("shield_feasible", flag(&|s| s.report.shield_feasible))?;
+        info.set_item("shield_braked", flag(&|s| s.report.shield_braked))?;
+        info.set_item("shield_recovering", flag(&|s| s.report.shield_recovering))?;
         info.set_item("intervention", col(&|s| s.report.intervention))?;
         info.set_item("coverage", col(&|s| s.report.coverage))?;
         info.set_item("new_coverage", col(&|s| s.report.new_coverage))?;

@@ -108,6 +108,7 @@ macro_rules! each_field {
         $f!("voxel_size", shield.scan.voxel_size);
         $f!("angular_bins", shield.scan.angular_bins);
         $f!("grad_eps", shield.grad_eps);
+        $f!("brake_margin", shield.braking.margin);
         $f!("d_view", planner.d_view);
         $f!("gamma_h", planner.gamma_h);
         $f!("gamma_v", planner.gamma_v);
@@ -252,7 +253,7 @@ pub fn episode_config(
         let name: String = v
             .extract()
             .map_err(|_| invalid("shield", "expected a string"))?;
-        c.shield.method = ShieldMethod::parse(&name).map_err(|_| invalid("shield", format!("unknown shield {name:?}; expected \"composite\", \"distance\", \"hardmin\" or \"none\"")))?;
+        c.shield.method = ShieldMethod::parse(&name).map_err(|_| invalid("shield", format!("unknown shield {name:?}; expected one of {:?}", ShieldMethod::NAMES)))?;
     }
     if let Some(v) = kw.get_item("action_mode")? {
         let name: String = v

@@ -56,6 +56,8 @@ fn info<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
     d.set_item(intern!(py, "h_min"), r.h_min)?;
     d.set_item(intern!(py, "shield_active"), r.shield_active)?;
     d.set_item(intern!(py, "shield_feasible"), r.shield_feasible)?;
+    d.set_item(intern!(py, "shield_braked"), r.shield_braked)?;
+    d.set_item(intern!(py, "shield_recovering"), r.shield_recovering)?;
     d.set_item(intern!(py, "intervention"), r.intervention)?;
     d.set_item(intern!(py, "u_nom"), PyArray1::from_slice(py, &r.u_nom))?;
     d.set_item(
@@ -88,6 +90,8 @@ pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<
     d.set_item("intervention_mean", s.intervention_mean)?;
     d.set_item("shield_active_steps", s.shield_active_steps)?;
     d.set_item("shield_infeasible_steps", s.shield_infeasible_steps)?;
+    d.set_item("shield_braked_steps", s.shield_braked_steps)?;
+    d.set_item("shield_recovering_steps", s.shield_recovering_steps)?;
     d.set_item("min_clearance", s.min_clearance)?;
     d.set_item("min_h", s.min_h)?;
     d.set_item("solve_time_mean_ns", s.solve_time_mean_ns)?;
@@ -303,6 +307,14 @@ impl PyEpisode {
     #[getter]
     fn true_pose(&self) -> (f64, f64, f64) {
         pose_tuple(self.inner.world().true_pose())
+    }
+
+    /// The body velocity `(v_x, v_y, ω)` (body frame) the last step left the robot at: the
+    /// tracker state the braking shield's check starts from.
+    #[getter]
+    fn velocity(&self) -> (f64, f64, f64) {
+        let v = self.inner.velocity();
+        (v[0], v[1], v[2])
     }
 
     /// The odometry estimate `(x, y, yaw)`.

@@ -4,7 +4,8 @@ use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArray, PyUnty
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use shieldnav_core::math::{rot_z, Mat3};
-use shieldnav_core::shield::{BodyState, LinearConstraints, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod, ShieldOutcome};
+use shieldnav_core::robot::TrackerConfig;
+use shieldnav_core::shield::{BodyState, BrakingModel, LinearConstraints, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod, ShieldOutcome};
 
 use crate::errors::{invalid, to_py};
 
@@ -56,7 +57,8 @@ impl<'py> PointsArg<'py> {
 
 /// Shield(semi_axes=(0.9, 0.45), gamma=0.9, kappa=8.0, alpha=2.0, crop_radius=3.5, u_max=None,
 ///        method="composite", safety_distance=0.8, height_band=(-0.4, 1.5), voxel_size=None,
-///        angular_bins=None, grad_eps=1e-9)
+///        angular_bins=None, grad_eps=1e-9, tracker_tau=0.15, a_max=(2.0, 2.0), w_max=1.5,
+///        yaw_accel_max=4.0, dt=0.02, brake_margin=0.03)
 ///
 /// The composite control-barrier-function safety shield (paper Sec. III) and its baselines.
 ///
@@ -64,19 +66,33 @@ impl<'py> PointsArg<'py> {
 /// `filter(points, u_nom, rotation=R, omega=w)` (3D) returns the world-frame command
 /// u* = argmin |u - u_nom|^2 s.t. dH/dp . u >= -alpha H - dH/dt, |u| <= u_max.
 ///
+/// `method="braking"` filters the rotation too: (u, omega) nearest (u_nom, omega) with
+/// dH/dp . u + dH/domega . omega >= -alpha H, |u| <= u_max, |omega| <= w_max; a planar one
+/// then checks that after one period `dt` of that command the robot, whose velocity follows
+/// a lag `tracker_tau` with acceleration limits `a_max`, `yaw_accel_max`, can still brake to a stop with
+/// its ellipse free, and brakes (command 0) if not. It needs `velocity=(vx, vy, omega)`, the
+/// body's measured velocity, at every call.
+///
 /// Arguments:
 ///     semi_axes: body-frame ellipsoid semi-axes (m); 2 values planar, 3 values 3D.
 ///     gamma, kappa: saturation and sharpness of the soft-min composite (> 0).
 ///     alpha: gain of alpha(h) = alpha * h (> 0).
 ///     crop_radius: drop points farther than this (m); None keeps all.
 ///     u_max: symmetric world-frame velocity box (m/s), one entry per axis; None for no box.
-///     method: "composite", "distance" (one 0.8 m sphere row per point, Clarabel),
-///         "hardmin" (nearest point only) or "none" (no filter, H still reported).
+///     method: "composite" (the paper's filter), "braking" (rotation filtered, braking
+///         checked), "distance" (one 0.8 m sphere row per point, Clarabel), "hardmin"
+///         (nearest point only) or "none" (no filter, H still reported).
 ///     safety_distance: s_d of the distance baseline (m).
 ///     height_band: (z_lo, z_hi) body-frame band kept when a planar shield gets (N, 3) points.
 ///     voxel_size, angular_bins: optional down-sampling; each keeps the point with the
 ///         smallest h per cell. The composite turns conservative like ln(N)/kappa.
 ///     grad_eps: below this gradient norm an unmet row counts as infeasible (stop).
+///     tracker_tau, a_max, w_max, yaw_accel_max, dt: the robot's velocity tracker (lag in s, acceleration
+///         limits in m/s^2, yaw-rate limit in rad/s, yaw acceleration limit in rad/s^2) and
+///         control period (s), for method "braking"; its speed limit is u_max (default
+///         (1.6, 0.8)).
+///     brake_margin: clearance (m) the braking check keeps beyond the swept ellipse, for
+///         range noise and the gaps between beams.
 ///
 /// Points are float32 or float64 (N, 2) / (N, 3) C-contiguous arrays in the body frame, read
 /// without a copy. Bad input raises shieldnav.InvalidArgumentError (a ValueError).
@@ -101,6 +117,12 @@ impl PyShield {
         voxel_size = ShieldConfig::default().scan.voxel_size,
         angular_bins = ShieldConfig::default().scan.angular_bins,
         grad_eps = ShieldConfig::default().grad_eps,
+        tracker_tau = TrackerConfig::default().tau,
+        a_max = TrackerConfig::default().a_max,
+        w_max = TrackerConfig::default().w_max,
+        yaw_accel_max = TrackerConfig::default().alpha_max,
+        dt = BrakingModel::default().dt,
+        brake_margin = BrakingModel::default().margin,
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -116,7 +138,18 @@ impl PyShield {
         voxel_size: Option<f64>,
         angular_bins: Option<usize>,
         grad_eps: f64,
+        tracker_tau: f64,
+        a_max: [f64; 2],
+        w_max: f64,
+        yaw_accel_max: f64,
+        dt: f64,
+        brake_margin: f64,
     ) -> PyResult<Self> {
+        let mut tracker = TrackerConfig { tau: tracker_tau, a_max, w_max, alpha_max: yaw_accel_max, ..TrackerConfig::default() };
+        if let Some(m) = u_max.as_deref().filter(|m| m.len() == 2) {
+            // the braking model's speed limit is the box
+            tracker.v_max = [m[0], m[1]];
+        }
         let config = ShieldConfig {
             semi_axes,
             gamma,
@@ -127,20 +160,24 @@ impl PyShield {
             safety_distance,
             scan: ScanFilter { crop_radius, height_band, voxel_size, angular_bins },
             grad_eps,
+            braking: BrakingModel { tracker, dt, margin: brake_margin },
         };
         Ok(Self { inner: Shield::new(config).map_err(to_py)? })
     }
 
-    /// filter(points, u_nom, yaw=None, omega=None, rotation=None, extra_A=None, extra_b=None)
+    /// filter(points, u_nom, yaw=None, omega=None, rotation=None, extra_A=None, extra_b=None,
+    ///        velocity=None)
     ///
     /// The safe command nearest `u_nom` (world frame) against a body-frame scan: `points`
     /// float32 or float64 (N, 2) or (N, 3), C-contiguous, read without a copy. A planar shield
     /// takes `yaw` (rad) and the yaw rate `omega` (rad/s); a 3D one `rotation` (3x3,
     /// body-to-world) or `yaw`, and `omega` as the body angular velocity (3 values).
-    /// `extra_A @ u >= extra_b` adds rows, solved with the barrier's by Clarabel. Returns a
-    /// `ShieldOutcome` (u, H, h_min, grad_p, dH_dt, num_points, active, feasible,
+    /// `extra_A @ u >= extra_b` adds rows, solved with the barrier's by Clarabel. For
+    /// method "braking", `omega` is the nominal rotation command it filters and `velocity`
+    /// the body's measured (vx, vy, omega), body frame. Returns a `ShieldOutcome` (u, omega,
+    /// H, h_min, grad_p, dH_dt, num_points, active, feasible, braked, recovering, sweep_h,
     /// solve_time_ns); bad input raises `InvalidArgumentError` naming the argument.
-    #[pyo3(signature = (points, u_nom, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None))]
+    #[pyo3(signature = (points, u_nom, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None, velocity = None))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn filter(
         &mut self,
@@ -152,14 +189,15 @@ impl PyShield {
         rotation: Option<&Bound<'_, PyAny>>,
         extra_A: Option<&Bound<'_, PyAny>>,
         extra_b: Option<&Bound<'_, PyAny>>,
+        velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyShieldOutcome> {
-        self.run(py, points, u_nom, None, yaw, omega, rotation, extra_A, extra_b)
+        self.run(py, points, u_nom, None, yaw, omega, rotation, extra_A, extra_b, velocity)
     }
 
     /// Like `filter`, for world-frame points and the robot at `position`: (x, y) or
     /// (x, y, z) for a planar shield (the height band of (N, 3) points applies to their
     /// height above z, 0 if not given), (x, y, z) for a 3D one.
-    #[pyo3(signature = (points, u_nom, position, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None))]
+    #[pyo3(signature = (points, u_nom, position, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None, velocity = None))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn filter_world(
         &mut self,
@@ -172,8 +210,9 @@ impl PyShield {
         rotation: Option<&Bound<'_, PyAny>>,
         extra_A: Option<&Bound<'_, PyAny>>,
         extra_b: Option<&Bound<'_, PyAny>>,
+        velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyShieldOutcome> {
-        self.run(py, points, u_nom, Some(position), yaw, omega, rotation, extra_A, extra_b)
+        self.run(py, points, u_nom, Some(position), yaw, omega, rotation, extra_A, extra_b, velocity)
     }
 
     /// The configuration as a dict of the constructor's keyword arguments.
@@ -222,12 +261,20 @@ impl PyShield {
         rotation: Option<&Bound<'_, PyAny>>,
         extra_a: Option<&Bound<'_, PyAny>>,
         extra_b: Option<&Bound<'_, PyAny>>,
+        velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyShieldOutcome> {
         let dim = self.inner.dim();
         let pts = PointsArg::extract(points)?;
         let scan = pts.scan()?;
         let u = vector("u_nom", u_nom)?;
-        let state = body_state(dim, yaw, omega, rotation)?;
+        let mut state = body_state(dim, yaw, omega, rotation)?;
+        if let Some(v) = velocity {
+            let v = vector("velocity", v)?;
+            if dim != 2 || v.len() != 3 {
+                return Err(invalid("velocity", format!("the braking check takes a planar body's (vx, vy, omega), 3 values, on a planar shield; got {} values on a {dim}-D shield", v.len())));
+            }
+            state = state.with_velocity([v[0], v[1], v[2]]).map_err(to_py)?;
+        }
         let extra = extra_rows(dim, extra_a, extra_b)?;
         let position = match position {
             Some(p) => {
@@ -332,6 +379,12 @@ fn config_dict<'py>(py: Python<'py>, c: &ShieldConfig) -> PyResult<Bound<'py, Py
     d.set_item("voxel_size", c.scan.voxel_size)?;
     d.set_item("angular_bins", c.scan.angular_bins)?;
     d.set_item("grad_eps", c.grad_eps)?;
+    d.set_item("tracker_tau", c.braking.tracker.tau)?;
+    d.set_item("a_max", c.braking.tracker.a_max.to_vec())?;
+    d.set_item("w_max", c.braking.tracker.w_max)?;
+    d.set_item("yaw_accel_max", c.braking.tracker.alpha_max)?;
+    d.set_item("dt", c.braking.dt)?;
+    d.set_item("brake_margin", c.braking.margin)?;
     Ok(d)
 }
 
@@ -369,6 +422,33 @@ impl PyShieldOutcome {
     fn grad_p<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.inner.grad_p[..self.inner.dim])
     }
+    /// The rotation command (rad/s; a float planar, 3 values 3D): filtered by the braking
+    /// shield, the given omega otherwise.
+    #[getter]
+    fn omega(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let w = &self.inner.omega;
+        if self.inner.dim == 2 {
+            Ok(w[2].into_pyobject(py)?.into_any().unbind())
+        } else {
+            Ok(PyArray1::from_slice(py, w).into_any().unbind())
+        }
+    }
+    /// The braking check refused the row's command: u and omega are the brake (0).
+    #[getter]
+    fn braked(&self) -> bool {
+        self.inner.braked
+    }
+    /// The ellipse holds a point: the command raises H fastest within the box, unchecked.
+    #[getter]
+    fn recovering(&self) -> bool {
+        self.inner.recovering
+    }
+    /// The braking check's least h against the ellipse swept until the robot stands (>= 0
+    /// passes); NaN when no check ran.
+    #[getter]
+    fn sweep_h(&self) -> f64 {
+        self.inner.sweep_h
+    }
     /// dH/dt caused by the robot's rotation.
     #[getter(dH_dt)]
     fn dh_dt(&self) -> f64 {
@@ -398,13 +478,16 @@ impl PyShieldOutcome {
     fn __repr__(&self) -> String {
         let o = &self.inner;
         format!(
-            "ShieldOutcome(u={:?}, H={:.6}, h_min={:.6}, num_points={}, active={}, feasible={}, solve_time_ns={})",
+            "ShieldOutcome(u={:?}, omega={:?}, H={:.6}, h_min={:.6}, num_points={}, active={}, feasible={}, braked={}, recovering={}, solve_time_ns={})",
             &o.u[..o.dim],
+            if o.dim == 2 { &o.omega[2..] } else { &o.omega[..] },
             o.value,
             o.h_min,
             o.num_points,
             o.active,
             o.feasible,
+            o.braked,
+            o.recovering,
             o.solve_time_ns
         )
     }

@@ -8,7 +8,7 @@ use crate::control::{NominalController, NominalControllerConfig};
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::planner::ViewPlannerConfig;
-use crate::shield::{move_points, BodyState, Motion, Scan as PointScan, Shield, ShieldConfig, ShieldOutcome};
+use crate::shield::{move_points, BodyState, BrakingModel, Motion, Scan as PointScan, Shield, ShieldConfig, ShieldMethod, ShieldOutcome};
 use crate::world::generate::{generate, GeneratorConfig};
 use crate::world::{preset, wrap_angle, Pose2, Scenario, World, WorldConfig};
 
@@ -39,7 +39,8 @@ impl Default for RewardConfig {
 pub struct EpisodeConfig {
     /// Robot, tracker, LIDAR, control period. Its `seed` is replaced at every reset.
     pub world: WorldConfig,
-    /// The shield. Without `u_max` the box is the tracker's body-frame speed limits.
+    /// The shield. Without `u_max` the box is the tracker's body-frame speed limits; its
+    /// braking model is the world's tracker and control period.
     pub shield: ShieldConfig,
     /// The camera model of the coverage test (`fov_h`, `d_view`), shared with the planner.
     pub planner: ViewPlannerConfig,
@@ -69,9 +70,10 @@ pub struct EpisodeConfig {
     pub goal_tolerance: Real,
     /// Truncate the episode after this many steps (the registered time limit); `None`: never.
     pub time_limit: Option<u64>,
-    /// When the shield reports its constraint infeasible, stop (translation and rotation): the
-    /// safe command against static walls. Off: send the shield's documented least-violating
-    /// command.
+    /// For the shields other than `"braking"`: when the shield reports its constraint
+    /// infeasible, stop (translation and rotation). Off: send the shield's documented
+    /// least-violating command. The braking shield's own fallbacks (brake when the check
+    /// fails, recover when the ellipse holds a point) always apply.
     pub stop_when_infeasible: bool,
 }
 
@@ -79,7 +81,7 @@ impl Default for EpisodeConfig {
     fn default() -> Self {
         Self {
             world: WorldConfig::default(),
-            shield: ShieldConfig::default(),
+            shield: ShieldConfig { method: ShieldMethod::Braking, ..ShieldConfig::default() },
             planner: ViewPlannerConfig::default(),
             controller: NominalControllerConfig::default(),
             action_mode: ActionMode::Body,
@@ -144,6 +146,10 @@ pub struct StepReport {
     pub shield_active: bool,
     /// The shield's constraints could be met.
     pub shield_feasible: bool,
+    /// The braking shield's check refused the row's command: the robot brakes.
+    pub shield_braked: bool,
+    /// The braking shield is moving the robot out of an ellipse that holds a point.
+    pub shield_recovering: bool,
     /// `‖u* − u_nom‖` (m/s).
     pub intervention: Real,
     /// Nominal body-frame command `(v_x, v_y, ω)`.
@@ -198,6 +204,10 @@ pub struct EpisodeSummary {
     pub shield_active_steps: u64,
     /// Steps where the shield was infeasible.
     pub shield_infeasible_steps: u64,
+    /// Steps where the braking shield braked.
+    pub shield_braked_steps: u64,
+    /// Steps where the braking shield recovered from an ellipse holding a point.
+    pub shield_recovering_steps: u64,
     /// Smallest true clearance (m).
     pub min_clearance: Real,
     /// Smallest `min_i h_i`.
@@ -267,6 +277,7 @@ impl Episode {
         if config.shield.u_max.is_none() {
             config.shield.u_max = Some(config.world.tracker.v_max.to_vec());
         }
+        config.shield.braking = BrakingModel { tracker: config.world.tracker, dt: config.world.dt, ..config.shield.braking };
         if config.time_limit == Some(0) {
             return Err(Error::invalid("time_limit", "must be at least 1 step (or None)"));
         }
@@ -466,10 +477,15 @@ impl Episode {
         let w_max = self.config.world.tracker.w_max;
         let omega = u_nom[2].clamp(-w_max, w_max);
         let scan = PointScan::new_f32(&self.near, 3)?.moved(self.motion);
-        let out = self
-            .shield
-            .filter(&scan, &BodyState::planar(0.0, omega)?, &u_nom[..2])?;
-        let u = if out.feasible || !self.config.stop_when_infeasible { [out.u[0], out.u[1], omega] } else { [0.0; 3] };
+        let state = BodyState::planar(0.0, omega)?.with_velocity(self.velocity)?;
+        let out = self.shield.filter(&scan, &state, &u_nom[..2])?;
+        let u = if self.config.shield.method == ShieldMethod::Braking {
+            [out.u[0], out.u[1], out.omega[2]]
+        } else if out.feasible || !self.config.stop_when_infeasible {
+            [out.u[0], out.u[1], omega]
+        } else {
+            [0.0; 3]
+        };
         let intervention = (u[0] - u_nom[0]).hypot(u[1] - u_nom[1]);
         let before = self.world.true_pose();
         let step = self.world.step(u)?;
@@ -511,6 +527,8 @@ impl Episode {
             h_min: out.h_min,
             shield_active: out.active,
             shield_feasible: out.feasible,
+            shield_braked: out.braked,
+            shield_recovering: out.recovering,
             intervention,
             u_nom: [u_nom[0], u_nom[1], omega],
             u_filtered: u,
@@ -540,6 +558,8 @@ impl Episode {
         s.intervention_mean = self.intervention_sum / s.steps as Real;
         s.shield_active_steps += out.active as u64;
         s.shield_infeasible_steps += !out.feasible as u64;
+        s.shield_braked_steps += out.braked as u64;
+        s.shield_recovering_steps += out.recovering as u64;
         s.min_clearance = s.min_clearance.min(clearance);
         s.min_h = s.min_h.min(out.h_min);
         self.solve_time_sum += out.solve_time_ns as Real;
@@ -604,6 +624,11 @@ impl Episode {
         let mut out = Vec::new();
         move_points(&self.near, 3, &self.motion, &mut out);
         out
+    }
+
+    /// The body velocity `(v_x, v_y, ω)` the last step left the robot at (body frame).
+    pub fn velocity(&self) -> [Real; 3] {
+        self.velocity
     }
 
     /// The world.

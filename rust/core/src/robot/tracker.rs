@@ -36,9 +36,9 @@ impl TrackerConfig {
     /// Checks every field; the error names it.
     pub fn validate(&self) -> Result<()> {
         if !(self.tau.is_finite() && self.tau >= 0.0) {
-            return Err(Error::invalid("tau", format!("must be finite and >= 0, got {}", self.tau)));
+            return Err(Error::invalid("tracker_tau", format!("must be finite and >= 0, got {}", self.tau)));
         }
-        for (name, v) in [("v_max", self.v_max[0]), ("v_max", self.v_max[1]), ("w_max", self.w_max), ("a_max", self.a_max[0]), ("a_max", self.a_max[1]), ("alpha_max", self.alpha_max)] {
+        for (name, v) in [("v_max", self.v_max[0]), ("v_max", self.v_max[1]), ("w_max", self.w_max), ("a_max", self.a_max[0]), ("a_max", self.a_max[1]), ("yaw_accel_max", self.alpha_max)] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(Error::invalid(name, format!("must be finite and > 0, got {v}")));
             }
@@ -93,18 +93,37 @@ impl Tracker {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::invalid("dt", format!("must be finite and > 0, got {dt}")));
         }
-        let c = &self.config;
-        let vmax = [c.v_max[0], c.v_max[1], c.w_max];
-        let amax = [c.a_max[0], c.a_max[1], c.alpha_max];
-        let gain = if c.tau > 0.0 { 1.0 - (-dt / c.tau).exp() } else { 1.0 };
+        let (velocity, saturated) = self.config.next_velocity(self.velocity, command, self.config.gain(dt), dt);
+        self.velocity = velocity;
+        Ok(TrackerOutcome { velocity, saturated })
+    }
+}
+
+impl TrackerConfig {
+    /// The share `1 − e^{−dt/τ}` of the gap to the command that one step of `dt` closes.
+    pub fn gain(&self, dt: Real) -> Real {
+        if self.tau > 0.0 {
+            1.0 - (-dt / self.tau).exp()
+        } else {
+            1.0
+        }
+    }
+
+    /// The velocity after one step of `dt` from `velocity` toward `command`, with
+    /// `gain = self.gain(dt)`, and whether the command was saturated: the tracker's one
+    /// formula, which the shield's braking check replays.
+    #[inline]
+    pub fn next_velocity(&self, velocity: [Real; 3], command: [Real; 3], gain: Real, dt: Real) -> ([Real; 3], bool) {
+        let vmax = [self.v_max[0], self.v_max[1], self.w_max];
+        let amax = [self.a_max[0], self.a_max[1], self.alpha_max];
+        let mut out = velocity;
         let mut saturated = false;
         for k in 0..3 {
             let target = command[k].clamp(-vmax[k], vmax[k]);
             saturated |= target != command[k];
-            let dv = ((target - self.velocity[k]) * gain).clamp(-amax[k] * dt, amax[k] * dt);
-            self.velocity[k] += dv;
+            out[k] += ((target - velocity[k]) * gain).clamp(-amax[k] * dt, amax[k] * dt);
         }
-        Ok(TrackerOutcome { velocity: self.velocity, saturated })
+        (out, saturated)
     }
 }
 

@@ -41,8 +41,12 @@ pub struct CompositeBarrier {
     pub h_min: f64,
     /// `∂H/∂p_r` in the body frame (rotate by `R` for the world frame); `z = 0` when planar.
     pub grad_body: Vec3,
-    /// `∂H/∂t`, the change of `H` caused by the robot's rotation.
+    /// `∂H/∂t`, the change of `H` caused by the robot's rotation: `grad_omega · ω`.
     pub dh_dt: f64,
+    /// `∂(∂H/∂t)/∂ω`: the rotation term is linear in the body-frame angular velocity, so the
+    /// filter row is linear in `(v, ω)` with this as the coefficient of `ω` (`[0, 0, ·]`
+    /// when planar).
+    pub grad_omega: Vec3,
     /// Points that entered the composite (after crop and height band).
     pub num_points: usize,
 }
@@ -409,7 +413,7 @@ pub(crate) fn composite_of_valid<T: Lane>(pts: &[T], stride: usize, motion: Opti
         return Err(Error::invalid("points", "contains NaN or inf (or a coordinate too large to square)"));
     }
     if n == 0 {
-        return Ok(CompositeBarrier { value: p.gamma, h_min: f64::MAX, grad_body: [0.0; 3], dh_dt: 0.0, num_points: 0 });
+        return Ok(CompositeBarrier { value: p.gamma, h_min: f64::MAX, grad_body: [0.0; 3], dh_dt: 0.0, grad_omega: [0.0; 3], num_points: 0 });
     }
     let shift = shift.to_f64();
     let h_min = hmin.to_f64();
@@ -418,6 +422,7 @@ pub(crate) fn composite_of_valid<T: Lane>(pts: &[T], stride: usize, motion: Opti
     let inv_s = 1.0 / sums.s;
     let grad_body = [-2.0 * a[0] * sums.cx * inv_s, -2.0 * a[1] * sums.cy * inv_s, -2.0 * a[2] * sums.cz * inv_s];
     let w = p.omega;
-    let dh_dt = 2.0 * inv_s * (w[0] * (a[1] - a[2]) * sums.cyz + w[1] * (a[2] - a[0]) * sums.cxz + w[2] * (a[0] - a[1]) * sums.cxy);
-    Ok(CompositeBarrier { value, h_min, grad_body, dh_dt, num_points: n })
+    let grad_omega = [2.0 * inv_s * (a[1] - a[2]) * sums.cyz, 2.0 * inv_s * (a[2] - a[0]) * sums.cxz, 2.0 * inv_s * (a[0] - a[1]) * sums.cxy];
+    let dh_dt = w[0] * grad_omega[0] + w[1] * grad_omega[1] + w[2] * grad_omega[2];
+    Ok(CompositeBarrier { value, h_min, grad_body, dh_dt, grad_omega, num_points: n })
 }

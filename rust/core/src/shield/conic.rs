@@ -182,7 +182,7 @@ pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>
     if rows.dim() != d {
         return Err(Error::DimensionMismatch { name: "extra_A", expected: d, got: rows.dim() });
     }
-    let mut clamped = [0.0; 3];
+    let mut clamped = [0.0; super::qp::MAX_VARS];
     for j in 0..d {
         clamped[j] = u_max.map_or(u_nom[j], |m| u_nom[j].clamp(-m[j], m[j]));
     }
@@ -194,7 +194,7 @@ pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>
     let a = build(rows, d, u_max, &[]);
     let b = rhs(rows, u_max);
     let (status, x) = run(&p, &q, &a, &b)?;
-    let mut u = [0.0; 3];
+    let mut u = [0.0; super::qp::MAX_VARS];
     if solved(status) {
         u[..d].copy_from_slice(&x[..d]);
         return Ok(QpSolution { u, active: true, feasible: true });

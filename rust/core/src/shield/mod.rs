@@ -5,9 +5,12 @@
 //!
 //! `u* = argmin ‖u − u_nom‖²  s.t.  ∂H/∂pᵀ u ≥ −α(H) − ∂H/∂t,  |u_j| ≤ u_max_j`.
 //!
-//! Methods ([`ShieldMethod`]): the paper's soft-min composite of one ellipsoidal CBF per
-//! point (closed-form exact QP), the distance baseline (one spherical row per point, all rows
-//! in one Clarabel QP), hard-min (the nearest point's ellipsoidal CBF only), and no filter.
+//! Methods ([`ShieldMethod`]): the braking shield (the composite row over velocity *and*
+//! rotation, and the [`braking`] check against the body's tracker, so the guarantee holds
+//! for the body that lags behind its command), the paper's soft-min composite of one
+//! ellipsoidal CBF per point (closed-form exact QP, translation only), the distance baseline
+//! (one spherical row per point, all rows in one Clarabel QP), hard-min (the nearest point's
+//! ellipsoidal CBF only), and no filter.
 //!
 //! ```
 //! use shieldnav_core::shield::{BodyState, Scan, Shield, ShieldConfig};
@@ -19,6 +22,7 @@
 //! assert!(out.u[1] < 1.0); // slowed down toward the wall
 //! ```
 
+pub mod braking;
 mod composite;
 mod conic;
 mod ellipsoid;
@@ -33,7 +37,8 @@ use composite::composite_of_valid;
 pub use conic::{solve_rows, LinearConstraints};
 pub use ellipsoid::{Envelope, MAX_SEMI_AXIS, MIN_SEMI_AXIS};
 pub use lane::Lane;
-pub use qp::{project_halfspace_box, QpSolution};
+pub use braking::{BrakingModel, Sweep};
+pub use qp::{project_halfspace_box, QpSolution, MAX_VARS};
 pub use scan::{select_points, ScanFilter, ScanScratch, MAX_ANGULAR_BINS};
 
 use crate::error::{Error, Result};
@@ -42,7 +47,12 @@ use crate::math::{det, mat_vec, orthonormality_error, rot_z, Mat3, Vec3};
 /// Which filter a [`Shield`] applies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ShieldMethod {
-    /// The paper's soft-min composite of per-point ellipsoidal CBFs (`"composite"`).
+    /// The composite barrier's row over the velocity and the rotation `(v, ω)`, each in its
+    /// box, and (planar) the [`braking`] check on the tracker model: the command is sent only
+    /// if the robot can still brake to a stop with its ellipse free (`"braking"`).
+    Braking,
+    /// The paper's soft-min composite of per-point ellipsoidal CBFs, filtering the
+    /// translation only (`"composite"`).
     Composite,
     /// One spherical distance row `‖p_i − p_r‖ ≥ s_d` per point, one Clarabel QP (`"distance"`).
     Distance,
@@ -53,16 +63,20 @@ pub enum ShieldMethod {
 }
 
 impl ShieldMethod {
-    /// Parses `"composite"`, `"distance"`, `"hardmin"` or `"none"`.
+    /// Every method name, in the order the docs list them.
+    pub const NAMES: [&'static str; 5] = ["braking", "composite", "distance", "hardmin", "none"];
+
+    /// Parses `"braking"`, `"composite"`, `"distance"`, `"hardmin"` or `"none"`.
     pub fn parse(name: &str) -> Result<Self> {
         match name {
+            "braking" => Ok(Self::Braking),
             "composite" => Ok(Self::Composite),
             "distance" => Ok(Self::Distance),
             "hardmin" => Ok(Self::HardMin),
             "none" => Ok(Self::Unfiltered),
             other => Err(Error::invalid(
                 "method",
-                format!("unknown method {other:?}; expected \"composite\", \"distance\", \"hardmin\" or \"none\""),
+                format!("unknown method {other:?}; expected \"braking\", \"composite\", \"distance\", \"hardmin\" or \"none\""),
             )),
         }
     }
@@ -70,6 +84,7 @@ impl ShieldMethod {
     /// The name [`ShieldMethod::parse`] reads.
     pub fn name(self) -> &'static str {
         match self {
+            Self::Braking => "braking",
             Self::Composite => "composite",
             Self::Distance => "distance",
             Self::HardMin => "hardmin",
@@ -91,7 +106,8 @@ pub struct ShieldConfig {
     pub kappa: f64,
     /// Gain of the linear class-K function `α(h) = α h`, `α > 0`.
     pub alpha: f64,
-    /// Symmetric world-frame velocity box `|u_j| ≤ u_max_j` (m/s), one entry per axis.
+    /// Symmetric world-frame velocity box `|u_j| ≤ u_max_j` (m/s), one entry per axis. The
+    /// braking shield's default is the tracker's `v_max`.
     pub u_max: Option<Vec<f64>>,
     /// Which filter.
     pub method: ShieldMethod,
@@ -101,6 +117,9 @@ pub struct ShieldConfig {
     pub scan: ScanFilter,
     /// Below this gradient norm the barrier counts as flat: an unmet row is infeasible.
     pub grad_eps: f64,
+    /// The body's tracker and control period, for the braking shield: its check replays
+    /// them, and the tracker's `w_max` boxes the rotation.
+    pub braking: BrakingModel,
 }
 
 impl Default for ShieldConfig {
@@ -115,6 +134,7 @@ impl Default for ShieldConfig {
             safety_distance: 0.8,
             scan: ScanFilter::default(),
             grad_eps: 1e-9,
+            braking: BrakingModel::default(),
         }
     }
 }
@@ -141,14 +161,28 @@ pub struct BodyState {
     rotation: Mat3,
     omega: Vec3,
     planar: bool,
+    velocity: Option<Vec3>,
 }
 
 impl BodyState {
-    /// A planar robot at heading `yaw` (rad) turning at `yaw_rate` (rad/s).
+    /// A planar robot at heading `yaw` (rad) turning at `yaw_rate` (rad/s). For the braking
+    /// shield `yaw_rate` is the nominal rotation command, which it filters.
     pub fn planar(yaw: f64, yaw_rate: f64) -> Result<Self> {
         finite("yaw", &[yaw])?;
         finite("omega", &[yaw_rate])?;
-        Ok(Self { rotation: rot_z(yaw), omega: [0.0, 0.0, yaw_rate], planar: true })
+        Ok(Self { rotation: rot_z(yaw), omega: [0.0, 0.0, yaw_rate], planar: true, velocity: None })
+    }
+
+    /// The same state with the body's measured velocity `(v_x, v_y, ω)` (body frame, m/s and
+    /// rad/s): the tracker state the braking check starts from.
+    pub fn with_velocity(self, velocity: Vec3) -> Result<Self> {
+        finite("velocity", &velocity)?;
+        Ok(Self { velocity: Some(velocity), ..self })
+    }
+
+    /// The measured body velocity, if given.
+    pub fn velocity(&self) -> Option<&Vec3> {
+        self.velocity.as_ref()
     }
 
     /// A robot with body-to-world rotation `rotation` and body-frame angular velocity `omega`.
@@ -159,7 +193,7 @@ impl BodyState {
         if err > ROTATION_TOLERANCE || det(&rotation) < 0.0 {
             return Err(Error::invalid("rotation", format!("not a proper rotation matrix (|RᵀR − I| = {err:.2e}, det = {:.3})", det(&rotation))));
         }
-        Ok(Self { rotation, omega, planar: false })
+        Ok(Self { rotation, omega, planar: false, velocity: None })
     }
 
     /// Body-to-world rotation.
@@ -270,6 +304,19 @@ pub struct ShieldOutcome {
     pub feasible: bool,
     /// Wall time of the whole call, points in to `u*` out (ns).
     pub solve_time_ns: u64,
+    /// The rotation command: filtered by the braking shield, the given `ω` otherwise
+    /// (body frame; `[0, 0, ω]` planar).
+    pub omega: Vec3,
+    /// The braking check refused the row's command and every fraction of it the shield
+    /// tries (½, ¼, ⅛): it sends the brake (`0`).
+    pub braked: bool,
+    /// The ellipse already holds a point (`min h_i < 0`): the braking shield sends the
+    /// command that raises `H` fastest within the box (the least-violating solution when
+    /// the row cannot be met), never a stop, and skips the check.
+    pub recovering: bool,
+    /// The braking check's value for the row's command: the least `h` against the ellipse
+    /// swept until the robot stands (≥ 0 passes); NaN when no check ran.
+    pub sweep_h: f64,
 }
 
 /// The safety shield: configuration, scratch buffers and the SIMD level of its kernel.
@@ -286,6 +333,11 @@ pub struct Shield {
     body: Vec<f64>,
     rows: LinearConstraints,
 }
+
+/// The fractions of the row's command the braking shield tries, in turn, before it brakes:
+/// near a wall the full command may fail the check while a slower one of the same direction
+/// passes (a robot standing by a wall would otherwise brake for ever).
+const BRAKING_SCALES: [f64; 4] = [1.0, 0.5, 0.25, 0.125];
 
 /// How far from orthonormal (`max |RᵀR − I|`) a rotation may be: a rotation written to six
 /// decimals is off by up to about 3e-6 (1e-6 refused a fifth of them); an error `ε` in `R`
@@ -335,6 +387,7 @@ impl Shield {
             }
         }
         config.scan.validate()?;
+        config.braking.validate()?;
         let dim = envelope.dim();
         Ok(Self {
             config,
@@ -388,7 +441,7 @@ impl Shield {
     /// by Clarabel.
     pub fn filter_with(&mut self, scan: &Scan, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<ShieldOutcome> {
         let start = Instant::now();
-        let in_kernel = matches!(self.config.method, ShieldMethod::Composite | ShieldMethod::Unfiltered);
+        let in_kernel = matches!(self.config.method, ShieldMethod::Braking | ShieldMethod::Composite | ShieldMethod::Unfiltered);
         if scan.motion.is_some() && !in_kernel {
             // the baselines read the points directly
             return self.on_moved_copy(scan, |sh, moved| sh.filter_with(moved, state, u_nom, extra));
@@ -405,12 +458,84 @@ impl Shield {
         };
         let alpha = self.config.alpha;
         let u_max = self.config.u_max.clone();
+        let mut omega_out = state.omega;
+        let (mut braked, mut recovering, mut sweep_h) = (false, false, f64::NAN);
         let (value, h_min, grad_p, dh_dt, num_points, sol) = match self.config.method {
+            ShieldMethod::Braking => {
+                let still = BodyState { omega: [0.0; 3], ..*state };
+                let b = self.barrier(scan, &still)?;
+                let g = to_world(&b.grad_body);
+                // variables (u, ω): the rotation term of ∂H/∂t is linear in ω
+                let nw = if dim == 2 { 1 } else { 3 };
+                let n = dim + nw;
+                let mut x_nom = [0.0; MAX_VARS];
+                let mut row = [0.0; MAX_VARS];
+                let mut lim = [0.0; MAX_VARS];
+                x_nom[..dim].copy_from_slice(u_nom);
+                row[..dim].copy_from_slice(&g[..dim]);
+                let t = &self.config.braking.tracker;
+                match &u_max {
+                    Some(m) => lim[..dim].copy_from_slice(m),
+                    None => lim[..2].copy_from_slice(&t.v_max),
+                }
+                if dim == 2 {
+                    x_nom[2] = state.omega[2];
+                    row[2] = b.grad_omega[2];
+                    lim[2] = t.w_max;
+                } else {
+                    x_nom[3..6].copy_from_slice(&state.omega);
+                    row[3..6].copy_from_slice(&b.grad_omega);
+                    lim[3..6].fill(t.w_max);
+                }
+                let mut sol = self.solve_row_n(&x_nom[..n], &row[..n], -alpha * b.value, &lim[..n], extra)?;
+                recovering = b.h_min < 0.0;
+                if dim == 2 && !recovering && b.num_points > 0 {
+                    let v0 = *state.velocity.as_ref().ok_or_else(|| {
+                        Error::invalid("velocity", "the braking shield needs the body's measured velocity (v_x, v_y, ω), body frame")
+                    })?;
+                    let cmd = crate::math::mat_t_vec(&r, &[sol.u[0], sol.u[1], 0.0]);
+                    let semi = self.envelope.semi_axes();
+                    // the row's command, else the largest of its fractions that passes, else the brake
+                    let mut passed = None;
+                    for scale in BRAKING_SCALES {
+                        let sweep = self.config.braking.sweep(v0, [scale * cmd[0], scale * cmd[1], scale * sol.u[2]], [semi[0], semi[1]]);
+                        let h = self.sweep_least_h(scan, &sweep);
+                        if scale == 1.0 {
+                            sweep_h = h;
+                        }
+                        if h >= 0.0 {
+                            passed = Some(scale);
+                            break;
+                        }
+                    }
+                    match passed {
+                        Some(1.0) => {}
+                        Some(scale) => {
+                            sol.u.iter_mut().for_each(|v| *v *= scale);
+                            sol.active = true;
+                        }
+                        None => {
+                            braked = true;
+                            sol = QpSolution { u: [0.0; MAX_VARS], active: true, feasible: sol.feasible };
+                        }
+                    }
+                }
+                let mut u = [0.0; MAX_VARS];
+                u[..dim].copy_from_slice(&sol.u[..dim]);
+                omega_out = [0.0; 3];
+                if dim == 2 {
+                    omega_out[2] = sol.u[2];
+                } else {
+                    omega_out.copy_from_slice(&sol.u[3..6]);
+                }
+                let dh_dt = (0..3).map(|k| b.grad_omega[k] * omega_out[k]).sum();
+                (b.value, b.h_min, g, dh_dt, b.num_points, QpSolution { u, ..sol })
+            }
             ShieldMethod::Composite | ShieldMethod::Unfiltered => {
                 let b = self.barrier(scan, state)?;
                 let g = to_world(&b.grad_body);
                 let sol = if self.config.method == ShieldMethod::Unfiltered {
-                    let mut u = [0.0; 3];
+                    let mut u = [0.0; MAX_VARS];
                     u[..dim].copy_from_slice(u_nom);
                     QpSolution { u, active: false, feasible: true }
                 } else {
@@ -464,16 +589,16 @@ impl Shield {
                     self.rows.extend(e)?;
                 }
                 // stop, as the composite does with a vanishing gradient (see `qp`)
-                let sol = if stuck { QpSolution { u: [0.0; 3], active: true, feasible: false } } else { solve_rows(u_nom, &self.rows, u_max.as_deref())? };
+                let sol = if stuck { QpSolution { u: [0.0; MAX_VARS], active: true, feasible: false } } else { solve_rows(u_nom, &self.rows, u_max.as_deref())? };
                 (h_min, h_min, g_near, 0.0, n, sol)
             }
         };
-        if !sol.u.iter().all(|v| v.is_finite()) {
+        if !sol.u.iter().chain(&omega_out).all(|v| v.is_finite()) {
             // (never seen within the parameters' bounds; a NaN command must not reach a robot)
             return Err(Error::Solver(format!("the filtered command is not finite: {:?}", &sol.u[..dim])));
         }
         Ok(ShieldOutcome {
-            u: sol.u,
+            u: [sol.u[0], sol.u[1], sol.u[2]],
             dim,
             value,
             h_min,
@@ -483,6 +608,10 @@ impl Shield {
             active: sol.active,
             feasible: sol.feasible,
             solve_time_ns: start.elapsed().as_nanos() as u64,
+            omega: omega_out,
+            braked,
+            recovering,
+            sweep_h,
         })
     }
 
@@ -595,6 +724,46 @@ impl Shield {
             }
         }
         &self.buf64
+    }
+
+    /// The braking check's least `h` over the points the composite used.
+    fn sweep_least_h(&self, scan: &Scan, sweep: &Sweep) -> f64 {
+        if self.config.scan.downsamples() {
+            // the down-sampled points (already moved, cropped and banded), as the barrier took them
+            return match scan.points {
+                Points::F32(_) => sweep.least_h(&self.buf32, self.dim(), None, f64::INFINITY, None),
+                Points::F64(_) => sweep.least_h(&self.buf64, self.dim(), None, f64::INFINITY, None),
+            };
+        }
+        let crop = self.config.scan.crop_radius.unwrap_or(f64::INFINITY);
+        let band = if scan.stride == 3 { self.config.scan.height_band } else { None };
+        match scan.points {
+            Points::F32(p) => sweep.least_h(p, scan.stride, scan.motion, crop, band),
+            Points::F64(p) => sweep.least_h(p, scan.stride, scan.motion, crop, band),
+        }
+    }
+
+    /// [`qp::project_checked`] over `n` variables with the box `lim`, or Clarabel with the
+    /// user's rows (over the translation; zero on the rotation).
+    fn solve_row_n(&mut self, x_nom: &[f64], row: &[f64], b: f64, lim: &[f64], extra: Option<&LinearConstraints>) -> Result<QpSolution> {
+        let n = x_nom.len();
+        match extra {
+            None => Ok(qp::project_checked(x_nom, row, b, Some(lim), self.config.grad_eps)),
+            Some(e) => {
+                let mut rows = LinearConstraints::new(n);
+                if b.is_finite() {
+                    rows.push(row, b)?;
+                }
+                let mut padded = [0.0; MAX_VARS];
+                for k in 0..e.len() {
+                    let (a, c) = e.row(k);
+                    padded[..n].fill(0.0);
+                    padded[..a.len()].copy_from_slice(a);
+                    rows.push(&padded[..n], c)?;
+                }
+                solve_rows(x_nom, &rows, Some(lim))
+            }
+        }
     }
 
     fn solve_row(&mut self, u_nom: &[f64], g: &Vec3, b: f64, u_max: Option<&[f64]>, extra: Option<&LinearConstraints>) -> Result<QpSolution> {

@@ -18,14 +18,20 @@
 //!   stay at `clamp(u_nom_j)`).
 //!
 //! Both report `feasible = false`; `u_nom` is never returned silently.
+//!
+//! Up to [`MAX_VARS`] variables: the planar velocity with the yaw rate (`d = 3`) and a 3D
+//! velocity with the body's angular velocity (`d = 6`) take the same projection.
 
 use crate::error::{Error, Result};
+
+/// Most variables a filter QP takes: `(v ∈ R³, ω ∈ R³)`.
+pub const MAX_VARS: usize = 6;
 
 /// The solution of one filter QP.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct QpSolution {
     /// The filtered command (the first `d` entries are used).
-    pub u: [f64; 3],
+    pub u: [f64; MAX_VARS],
     /// The constraint row changed the command (multiplier `μ > 0`).
     pub active: bool,
     /// The constraint could be met inside the box.
@@ -39,7 +45,7 @@ fn dot_d(g: &[f64], u: &[f64]) -> f64 {
 }
 
 /// Solves `min ‖u − u_nom‖² s.t. gᵀu ≥ b` and, with `u_max`, `|u_j| ≤ u_max_j`, exactly.
-/// `u_nom`, `g` and `u_max` have the same length `d ∈ {1, 2, 3}`, every value finite, `u_max`
+/// `u_nom`, `g` and `u_max` have the same length `d ∈ 1..=6`, every value finite, `u_max`
 /// ≥ 0 and `grad_eps` ≥ 0; else an error naming the argument.
 ///
 /// ```
@@ -64,11 +70,11 @@ pub fn project_halfspace_box(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[f
     Ok(project_checked(u_nom, g, b, u_max, grad_eps))
 }
 
-/// That `u_nom` (of 1 to 3 finite values) and `u_max` (as many, finite and ≥ 0) fit together.
+/// That `u_nom` (of 1 to [`MAX_VARS`] finite values) and `u_max` (as many, finite and ≥ 0) fit together.
 pub(crate) fn check_command(u_nom: &[f64], u_max: Option<&[f64]>) -> Result<()> {
     let d = u_nom.len();
-    if !(1..=3).contains(&d) || !u_nom.iter().all(|v| v.is_finite()) {
-        return Err(Error::invalid("u_nom", format!("expected 1 to 3 finite values, got {u_nom:?}")));
+    if !(1..=MAX_VARS).contains(&d) || !u_nom.iter().all(|v| v.is_finite()) {
+        return Err(Error::invalid("u_nom", format!("expected 1 to {MAX_VARS} finite values, got {u_nom:?}")));
     }
     if let Some(m) = u_max {
         if m.len() != d {
@@ -84,8 +90,8 @@ pub(crate) fn check_command(u_nom: &[f64], u_max: Option<&[f64]>) -> Result<()> 
 /// [`project_halfspace_box`] on checked arguments.
 pub(crate) fn project_checked(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[f64]>, grad_eps: f64) -> QpSolution {
     let d = u_nom.len();
-    debug_assert!(d <= 3 && g.len() == d && u_max.is_none_or(|m| m.len() == d));
-    let mut u = [0.0; 3];
+    debug_assert!(d <= MAX_VARS && g.len() == d && u_max.is_none_or(|m| m.len() == d));
+    let mut u = [0.0; MAX_VARS];
     let clamp = |j: usize, v: f64| match u_max {
         Some(m) => v.clamp(-m[j], m[j]),
         None => v,
@@ -98,7 +104,7 @@ pub(crate) fn project_checked(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[
     }
     let g2 = dot_d(g, g);
     if g2.sqrt() <= grad_eps {
-        return QpSolution { u: [0.0; 3], active: true, feasible: false };
+        return QpSolution { u: [0.0; MAX_VARS], active: true, feasible: false };
     }
     let Some(m) = u_max else {
         let mu = (b - dot_d(g, u_nom)) / g2;
@@ -123,7 +129,7 @@ pub(crate) fn project_checked(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[
         return QpSolution { u, active: true, feasible: false };
     }
     // Kinks of φ(μ) = Σ g_j clamp(u_nom_j + μ g_j): where a component enters or leaves the box.
-    let mut kinks = [0.0f64; 6];
+    let mut kinks = [0.0f64; 2 * MAX_VARS];
     let mut nk = 0;
     for j in 0..d {
         if g[j] != 0.0 {
@@ -221,13 +227,13 @@ mod tests {
     fn vanishing_gradient_with_violation_stops() {
         let s = project_halfspace_box(&[0.3, 0.2], &[0.0, 0.0], 0.1, None, 1e-9).unwrap();
         assert!(!s.feasible && s.active);
-        assert_eq!(s.u, [0.0; 3]);
+        assert_eq!(s.u, [0.0; MAX_VARS]);
     }
 
     #[test]
     fn unconstrained_when_row_holds() {
         let s = project_halfspace_box(&[0.3, 0.2, -0.1], &[1.0, 0.0, 0.0], -1.0, None, 1e-9).unwrap();
         assert!(s.feasible && !s.active);
-        assert_eq!(&s.u, &[0.3, 0.2, -0.1]);
+        assert_eq!(&s.u[..3], &[0.3, 0.2, -0.1]);
     }
 }

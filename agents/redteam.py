@@ -1,0 +1,275 @@
+"""The red team: attackers that try to make the shielded robot touch something.
+
+Each attacker drives the environment's own action (body-frame ``(v_x, v_y, ω)`` in
+``[-1, 1]³``) through the shield under test; the harness counts, over every episode, the
+steps in contact (``info["cost"]``), the episodes with contact and the least true clearance.
+
+Attackers:
+
+- ``held``: every component at ``±1`` (random signs), held for 0.1–1 s, then drawn again;
+- ``seeker``: full speed at the nearest LIDAR return while spinning at the full rate (the
+  spin's sign flips every 2–4 s);
+- ``skimmer``: full speed along the nearest wall while pressing into it, the heading turned
+  toward it;
+- ``ppo``: a PPO policy trained under the shield to touch things (``--train-attacker``: a
+  reward for contact and for low clearance), evaluated with ``--attacker-model``.
+
+Sites: procedural office sites, the paper's static scenarios and every ROS map in
+``--maps`` (default ``../shared/maps`` beside the repository); the scenario with moving
+obstacles runs too and is reported apart (``dynamic``), since a reactive shield cannot stop
+something from driving into a robot that already stands.
+
+    python -m agents.redteam                               # >= 10,000 episodes per shield
+    python -m agents.redteam --quick                       # a short look
+    python -m agents.redteam --shields braking --attackers held --episodes 64
+    python -m agents.redteam --train-attacker --timesteps 300000 --out results/redteam
+    python -m agents.redteam --attackers ppo --attacker-model results/redteam/attacker.zip
+    python -m agents.redteam --backend ray [--ray-address auto]
+
+Results: a table on stdout, ``redteam.json`` and ``redteam.csv`` under ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import gymnasium as gym
+import numpy as np
+from tqdm import tqdm
+
+import shieldnav  # noqa: F401  (registers the ids)
+from agents.benchmark import check_options, output_folder, positive_int
+from shieldnav.registration import ENV_IDS
+
+ATTACKERS = ["held", "seeker", "skimmer", "ppo"]
+SHIELDS = ["braking", "composite"]
+STATIC = ["shieldnav/CorridorInspection-v0", "shieldnav/ConstrictedPassage-v0", "shieldnav/OdometryJump-v0"]
+DYNAMIC = ["shieldnav/DynamicObstacles-v0"]
+DEFAULT_MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
+#: Control periods per second at the default dt.
+RATE = 50
+
+
+def sites(maps: Path | None) -> list[dict[str, Any]]:
+    """Every site of a full run: the static ids, each map of ``maps``, then the moving one."""
+    out = [{"site": env_id.split("/")[1].removesuffix("-v0"), "env_id": env_id, "kwargs": {}, "dynamic": False} for env_id in STATIC]
+    if maps is not None and maps.is_dir():
+        for yaml in sorted(maps.glob("*/*.yaml")):
+            out.append({"site": yaml.parent.name, "env_id": "shieldnav/MapInspection-v0", "kwargs": {"map_path": str(yaml)}, "dynamic": False})
+    out += [{"site": env_id.split("/")[1].removesuffix("-v0"), "env_id": env_id, "kwargs": {}, "dynamic": True} for env_id in DYNAMIC]
+    return out
+
+
+class Attacker:
+    """A vectorised attacker: ``act(obs) -> actions`` for ``n`` sub-environments."""
+
+    def __init__(self, kind: str, n: int, seed: int, model: str | None = None) -> None:
+        self.kind, self.n = kind, n
+        self.rng = np.random.default_rng(seed)
+        self.action = self.rng.choice([-1.0, 1.0], size=(n, 3))
+        self.hold = self.rng.integers(5, 51, size=n)
+        self.spin = self.rng.choice([-1.0, 1.0], size=n)
+        self.side = self.rng.choice([-1.0, 1.0], size=n)
+        self.model = None
+        if kind == "ppo":
+            if model is None:
+                raise ValueError("the ppo attacker needs --attacker-model (train one with --train-attacker)")
+            from stable_baselines3 import PPO
+
+            self.model = PPO.load(model, device="cpu")
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        if self.kind == "ppo":
+            action, _ = self.model.predict(obs, deterministic=False)
+            return np.clip(action, -1.0, 1.0)
+        if self.kind == "held":
+            self.hold -= 1
+            new = self.hold <= 0
+            k = int(new.sum())
+            if k:
+                self.action[new] = self.rng.choice([-1.0, 1.0], size=(k, 3))
+                self.hold[new] = self.rng.integers(5, 51, size=k)
+            return self.action.copy()
+        bins = obs.shape[1] - 9
+        nearest = np.argmin(obs[:, :bins], axis=1)
+        bearing = nearest * (2.0 * math.pi / bins)
+        flip = self.rng.random(self.n) < 1.0 / (3 * RATE)
+        self.spin[flip] *= -1.0
+        if self.kind == "seeker":
+            d = np.stack([np.cos(bearing), np.sin(bearing)], axis=1)
+            w = self.spin
+        else:  # skimmer: along the wall, pressed into it, turned toward it
+            along = bearing + self.side * (math.pi / 2)
+            d = np.stack([np.cos(along) + 0.6 * np.cos(bearing), np.sin(along) + 0.6 * np.sin(bearing)], axis=1)
+            w = np.clip(2.0 * np.sin(bearing), -1.0, 1.0)
+        d /= np.maximum(np.abs(d).max(axis=1, keepdims=True), 1e-9)
+        return np.concatenate([d, w[:, None]], axis=1)
+
+
+def run_cell(task: dict[str, Any]) -> dict[str, Any]:
+    """``episodes`` episodes of one attacker against one shield on one site, in one native
+    vector environment; returns the totals and the per-episode figures."""
+    n = min(task["num_envs"], task["episodes"])
+    env = gym.make_vec(
+        task["env_id"], num_envs=n, vectorization_mode="vector_entry_point", autoreset_mode="same_step",
+        time_limit=task["steps"], terminate_at_goal=False, shield=task["shield"], threads=task["threads"], **task["kwargs"],
+    )
+    attacker = Attacker(task["attacker"], n, task["seed"], task.get("model"))
+    obs, _ = env.reset(seed=task["seed"])
+    episodes: list[dict[str, float]] = []
+    started = time.perf_counter()
+    steps = 0
+    while len(episodes) < task["episodes"]:
+        obs, _, _, _, info = env.step(attacker.act(obs))
+        steps += n
+        final = info.get("final_info")
+        if final is not None:
+            ended = final["shieldnav_episode"]
+            for i in np.flatnonzero(ended["_contact_steps"]):
+                episodes.append({k: float(ended[k][i]) for k in ("contact_steps", "collisions", "min_clearance", "steps", "shield_braked_steps", "shield_recovering_steps")})
+    env.close()
+    episodes = episodes[: task["episodes"]]
+    contact = [e["contact_steps"] for e in episodes]
+    return {
+        **{k: task[k] for k in ("site", "env_id", "shield", "attacker", "dynamic")},
+        "episodes": len(episodes),
+        "steps": int(sum(e["steps"] for e in episodes)),
+        "contact_steps": int(sum(contact)),
+        "episodes_with_contact": int(sum(c > 0 for c in contact)),
+        "least_clearance": min(e["min_clearance"] for e in episodes),
+        "braked_steps": int(sum(e["shield_braked_steps"] for e in episodes)),
+        "recovering_steps": int(sum(e["shield_recovering_steps"] for e in episodes)),
+        "steps_per_s": steps / max(time.perf_counter() - started, 1e-9),
+    }
+
+
+def run_local(todo: list[dict[str, Any]]) -> Iterator[dict[str, Any]]:
+    for task in todo:
+        yield run_cell(task)
+
+
+def run_ray(todo: list[dict[str, Any]], address: str | None, workers: int) -> Iterator[dict[str, Any]]:
+    try:
+        import ray
+    except ImportError as err:
+        raise ImportError('the Ray backend needs Ray: pip install "shieldnav[ray]"') from err
+    if not ray.is_initialized():
+        env = {"env_vars": {"PYTHONPATH": os.pathsep.join(sys.path)}}
+        if address:
+            ray.init(address=address, runtime_env=env, log_to_driver=False)
+        else:
+            ray.init(num_cpus=workers, runtime_env=env, log_to_driver=False, include_dashboard=False)
+    remote = ray.remote(num_cpus=1)(run_cell)
+    pending = [remote.remote({**t, "threads": 1}) for t in todo]
+    try:
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            yield ray.get(done[0])
+    finally:
+        for p in pending:
+            ray.cancel(p)
+
+
+def train_attacker(env_id: str, shield: str, timesteps: int, seed: int, out: Path, num_envs: int) -> Path:
+    """PPO trained under ``shield`` with a reward for contact (+10 a step) and for low
+    clearance (``−clearance``, capped at 1 m): the strongest learned attacker we build."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
+    from shieldnav.sb3 import ShieldnavVecEnv
+
+    class AttackReward(VecEnvWrapper):  # type: ignore[misc]
+        def reset(self) -> Any:
+            return self.venv.reset()
+
+        def step_wait(self) -> Any:
+            obs, _, done, infos = self.venv.step_wait()
+            reward = np.array([10.0 * i["cost"] - min(i["clearance"], 1.0) for i in infos], dtype=np.float32)
+            return obs, reward, done, infos
+
+    venv = AttackReward(ShieldnavVecEnv(env_id, num_envs=num_envs, shield=shield, seed=seed, terminate_at_goal=False, time_limit=750))
+    model = PPO("MlpPolicy", venv, seed=seed, n_steps=256, batch_size=512, device="cpu", verbose=0)
+    model.learn(total_timesteps=timesteps, progress_bar=True)
+    path = out / "attacker.zip"
+    model.save(path)
+    return path
+
+
+def table(results: list[dict[str, Any]]) -> str:
+    """Totals per (static or moving, shield, attacker)."""
+    rows = ["| worlds | shield | attacker | episodes | steps | contact steps | episodes with contact | least clearance (m) |",
+            "|---|---|---|---:|---:|---:|---:|---:|"]
+    keys = sorted({(r["dynamic"], r["shield"], r["attacker"]) for r in results})
+    for dyn, shield, attacker in keys:
+        rs = [r for r in results if (r["dynamic"], r["shield"], r["attacker"]) == (dyn, shield, attacker)]
+        rows.append(
+            f"| {'moving' if dyn else 'static'} | {shield} | {attacker} | {sum(r['episodes'] for r in rs):,} | {sum(r['steps'] for r in rs):,} | "
+            f"{sum(r['contact_steps'] for r in rs):,} | {sum(r['episodes_with_contact'] for r in rs):,} | {min(r['least_clearance'] for r in rs):.3f} |"
+        )
+    return "\n".join(rows)
+
+
+def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
+    ap = argparse.ArgumentParser(prog="python -m agents.redteam", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--shields", nargs="+", default=SHIELDS, choices=["braking", "composite", "distance", "hardmin", "none"])
+    ap.add_argument("--attackers", nargs="+", default=["held", "seeker", "skimmer"], choices=ATTACKERS)
+    ap.add_argument("--episodes", type=positive_int, default=10_000, help="episodes per shield over the static worlds (split over sites and attackers)")
+    ap.add_argument("--steps", type=positive_int, default=750, help="steps per episode (50 Hz)")
+    ap.add_argument("--maps", type=Path, default=DEFAULT_MAPS, help="a folder of ROS maps (<name>/<name>.yaml)")
+    ap.add_argument("--num-envs", type=positive_int, default=64, help="episodes stepped together per cell")
+    ap.add_argument("--workers", type=positive_int, default=len(os.sched_getaffinity(0)), help="threads (local) or Ray CPUs")
+    ap.add_argument("--backend", default="local", choices=["local", "ray"])
+    ap.add_argument("--ray-address", default=None)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--quick", action="store_true", help="48 episodes per shield on three sites")
+    ap.add_argument("--attacker-model", default=None, help="the ppo attacker's model (.zip)")
+    ap.add_argument("--train-attacker", action="store_true", help="train the ppo attacker, then stop")
+    ap.add_argument("--timesteps", type=positive_int, default=300_000, help="--train-attacker's training steps")
+    ap.add_argument("--out", default="results/redteam")
+    args = ap.parse_args(argv)
+    check_options(ap, args, "shields", "attackers")
+    out = output_folder(ap, args.out)
+    if args.train_attacker:
+        path = train_attacker("shieldnav/CorridorInspection-v0", args.shields[0], args.timesteps, args.seed, out, 8)
+        print(f"attacker saved to {path}")
+        return []
+    if "ppo" in args.attackers and not args.attacker_model:
+        ap.error("argument --attackers: ppo needs --attacker-model (train one with --train-attacker)")
+    todo_sites = sites(None if args.quick else args.maps)
+    if args.quick:
+        todo_sites = [s for s in todo_sites if s["env_id"] in (STATIC[0], STATIC[1], DYNAMIC[0])]
+        args.episodes = min(args.episodes, 48)
+    static = [s for s in todo_sites if not s["dynamic"]]
+    per_cell = max(1, math.ceil(args.episodes / (len(static) * len(args.attackers))))
+    todo = [
+        {**s, "shield": shield, "attacker": attacker, "episodes": per_cell, "steps": args.steps, "seed": args.seed + 1000 * k,
+         "num_envs": args.num_envs, "threads": args.workers, "model": args.attacker_model}
+        for shield in args.shields for k, attacker in enumerate(args.attackers) for s in todo_sites
+    ]
+    source = run_local(todo) if args.backend == "local" else run_ray(todo, args.ray_address, args.workers)
+    results = []
+    try:
+        for r in tqdm(source, total=len(todo), desc="red team", unit="cell"):
+            results.append(r)
+    except KeyboardInterrupt:
+        print(f"interrupted: {len(results)} of {len(todo)} cells finished", file=sys.stderr)
+    if results:
+        (out / "redteam.json").write_text(json.dumps(results, indent=1))
+        with open(out / "redteam.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(results[0]))
+            w.writeheader()
+            w.writerows(results)
+        print(table(results))
+    return results
+
+
+if __name__ == "__main__":
+    main()
