@@ -43,7 +43,7 @@ from agents.episodes import check_policy, run_episode
 from shieldnav.exceptions import InvalidArgumentError
 from shieldnav.registration import ENV_IDS
 
-SHIELDS = ["composite", "distance", "hardmin", "none"]
+SHIELDS = ["braking", "composite", "distance", "hardmin", "none"]
 PAPER = ["shieldnav/ConstrictedPassage-v0", "shieldnav/OdometryJump-v0", "shieldnav/DynamicObstacles-v0"]
 SITES = ["shieldnav/CorridorInspection-v0", "shieldnav/MapInspection-v0"]
 #: Steps kept in the GIF: every n-th at 50 Hz.

@@ -77,6 +77,7 @@ class Shield:
         yaw_accel_max: float = ...,
         dt: float = ...,
         brake_margin: float = ...,
+        rotation_weight: float = ...,
     ) -> Shield: ...
     def filter(
         self,

@@ -109,6 +109,7 @@ macro_rules! each_field {
         $f!("angular_bins", shield.scan.angular_bins);
         $f!("grad_eps", shield.grad_eps);
         $f!("brake_margin", shield.braking.margin);
+        $f!("rotation_weight", shield.rotation_weight);
         $f!("d_view", planner.d_view);
         $f!("gamma_h", planner.gamma_h);
         $f!("gamma_v", planner.gamma_v);

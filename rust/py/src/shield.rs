@@ -58,7 +58,7 @@ impl<'py> PointsArg<'py> {
 /// Shield(semi_axes=(0.9, 0.45), gamma=0.9, kappa=8.0, alpha=2.0, crop_radius=3.5, u_max=None,
 ///        method="composite", safety_distance=0.8, height_band=(-0.4, 1.5), voxel_size=None,
 ///        angular_bins=None, grad_eps=1e-9, tracker_tau=0.15, a_max=(2.0, 2.0), w_max=1.5,
-///        yaw_accel_max=4.0, dt=0.02, brake_margin=0.03)
+///        yaw_accel_max=4.0, dt=0.02, brake_margin=0.03, rotation_weight=4.0)
 ///
 /// The composite control-barrier-function safety shield (paper Sec. III) and its baselines.
 ///
@@ -93,6 +93,8 @@ impl<'py> PointsArg<'py> {
 ///         (1.6, 0.8)).
 ///     brake_margin: clearance (m) the braking check keeps beyond the swept ellipse, for
 ///         range noise and the gaps between beams.
+///     rotation_weight: w in min |u - u_nom|^2 + w^2 |omega - omega_nom|^2 (method
+///         "braking"): large, the filter changes the translation first.
 ///
 /// Points are float32 or float64 (N, 2) / (N, 3) C-contiguous arrays in the body frame, read
 /// without a copy. Bad input raises shieldnav.InvalidArgumentError (a ValueError).
@@ -123,6 +125,7 @@ impl PyShield {
         yaw_accel_max = TrackerConfig::default().alpha_max,
         dt = BrakingModel::default().dt,
         brake_margin = BrakingModel::default().margin,
+        rotation_weight = ShieldConfig::default().rotation_weight,
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -144,6 +147,7 @@ impl PyShield {
         yaw_accel_max: f64,
         dt: f64,
         brake_margin: f64,
+        rotation_weight: f64,
     ) -> PyResult<Self> {
         let mut tracker = TrackerConfig { tau: tracker_tau, a_max, w_max, alpha_max: yaw_accel_max, ..TrackerConfig::default() };
         if let Some(m) = u_max.as_deref().filter(|m| m.len() == 2) {
@@ -161,6 +165,7 @@ impl PyShield {
             scan: ScanFilter { crop_radius, height_band, voxel_size, angular_bins },
             grad_eps,
             braking: BrakingModel { tracker, dt, margin: brake_margin },
+            rotation_weight,
         };
         Ok(Self { inner: Shield::new(config).map_err(to_py)? })
     }
@@ -385,6 +390,7 @@ fn config_dict<'py>(py: Python<'py>, c: &ShieldConfig) -> PyResult<Bound<'py, Py
     d.set_item("yaw_accel_max", c.braking.tracker.alpha_max)?;
     d.set_item("dt", c.braking.dt)?;
     d.set_item("brake_margin", c.braking.margin)?;
+    d.set_item("rotation_weight", c.rotation_weight)?;
     Ok(d)
 }
 

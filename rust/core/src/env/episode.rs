@@ -70,10 +70,10 @@ pub struct EpisodeConfig {
     pub goal_tolerance: Real,
     /// Truncate the episode after this many steps (the registered time limit); `None`: never.
     pub time_limit: Option<u64>,
-    /// For the shields other than `"braking"`: when the shield reports its constraint
-    /// infeasible, stop (translation and rotation). Off: send the shield's documented
-    /// least-violating command. The braking shield's own fallbacks (brake when the check
-    /// fails, recover when the ellipse holds a point) always apply.
+    /// When the shield reports its constraint infeasible, stop (translation and rotation).
+    /// Off: send the shield's documented least-violating command. The braking shield never
+    /// stops while it recovers (a point inside the ellipse): it sends the command that raises
+    /// `H` fastest within the box.
     pub stop_when_infeasible: bool,
 }
 
@@ -480,7 +480,12 @@ impl Episode {
         let state = BodyState::planar(0.0, omega)?.with_velocity(self.velocity)?;
         let out = self.shield.filter(&scan, &state, &u_nom[..2])?;
         let u = if self.config.shield.method == ShieldMethod::Braking {
-            [out.u[0], out.u[1], out.omega[2]]
+            // the brake is the braking shield's safe fallback; inside the ellipse it recovers
+            if out.feasible || out.recovering || !self.config.stop_when_infeasible {
+                [out.u[0], out.u[1], out.omega[2]]
+            } else {
+                [0.0; 3]
+            }
         } else if out.feasible || !self.config.stop_when_infeasible {
             [out.u[0], out.u[1], omega]
         } else {

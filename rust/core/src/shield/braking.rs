@@ -19,8 +19,10 @@
 //!    form per point: with `q` and `S = P_M` in the `θ_ref` frame and `Q` the grown ellipse's
 //!    shape, `t* = clamp(qᵀQS / SᵀQS, 0, 1)`, `h = (q − t*S)ᵀQ(q − t*S) − 1`.
 //!
-//! The candidate passes when the value is ≥ 0. Otherwise the shield brakes, which is safe
-//! by induction: the state it brakes from passed the check one period earlier, the brake's
+//! The candidate passes when the value is ≥ 0, or, when a point already lies within the
+//! margin of the standing robot's ellipse (noise, a moving obstacle), when it is no lower
+//! than that point's value there (up to [`WORSE`]): moving away stays allowed. Otherwise
+//! the shield brakes, which is safe by induction: the state it brakes from passed the check one period earlier, the brake's
 //! path from there is the tail of the path then checked, and static points do not move.
 //! What the argument assumes: the body follows the tracker model (it does away from contact),
 //! the points are static and were seen (the swept set is convex and holds the LIDAR, so
@@ -36,6 +38,10 @@ use super::lane::Lane;
 /// Longest brake replayed (control periods); the remaining displacement is bounded and added
 /// to the growth beyond it.
 const MAX_BRAKE_STEPS: usize = 20_000;
+/// How much lower than the standing robot's value a candidate's may be while a point lies
+/// within the margin (`h` units; about 2 mm at the default ellipse): the sweep of a robot
+/// moving straight away starts at its current pose grown by the margin and the lag's tail.
+pub const WORSE: f64 = 0.01;
 /// The replay stops once what the lag can still move the robot is below this (m, rad).
 const TAIL: f64 = 5e-4;
 
@@ -127,6 +133,7 @@ impl BrakingModel {
             heading,
             semi_axes: grown,
             growth: rho,
+            here: grow(semi_axes[0], semi_axes[1], self.margin),
             first_velocity: t.next_velocity(v0, command, gain, dt).0,
             steps,
         }
@@ -162,8 +169,10 @@ pub struct Sweep {
     pub heading: f64,
     /// The grown ellipse's semi-axes (m).
     pub semi_axes: [f64; 2],
-    /// How much the path's bends and turns grew the ellipse by (m).
+    /// How much the path's bends and turns and the margin grew the ellipse by (m).
     pub growth: f64,
+    /// The ellipse at the current pose grown by the margin alone: the standing robot's.
+    pub here: [f64; 2],
     /// The body velocity after the candidate's period.
     pub first_velocity: [f64; 3],
     /// Control periods replayed.
@@ -173,9 +182,9 @@ pub struct Sweep {
 impl Sweep {
     /// The least `h` of `pts` (rows of `stride`, moved by `motion` first, those farther than
     /// `crop` or outside the height band skipped, as the composite skips them) against the
-    /// swept ellipse; `f64::MAX` without points. The points are checked finite by the
-    /// composite pass before.
-    pub fn least_h<T: Lane>(&self, pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>) -> f64 {
+    /// swept ellipse, and against the standing robot's ([`Sweep::here`]); `f64::MAX` without
+    /// points. The points are checked finite by the composite pass before.
+    pub fn least_h<T: Lane>(&self, pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>) -> (f64, f64) {
         let (s, c) = self.heading.sin_cos();
         let (ia, ib) = (1.0 / (self.semi_axes[0] * self.semi_axes[0]), 1.0 / (self.semi_axes[1] * self.semi_axes[1]));
         let (sx, sy) = (self.chord[0], self.chord[1]);
@@ -184,7 +193,9 @@ impl Sweep {
         let m = motion.unwrap_or(Motion { cos: 1.0, sin: 0.0, tx: 0.0, ty: 0.0 });
         let crop2 = crop * crop;
         let (z_lo, z_hi) = band.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+        let (ha, hb) = (1.0 / (self.here[0] * self.here[0]), 1.0 / (self.here[1] * self.here[1]));
         let mut least = f64::MAX;
+        let mut here = f64::MAX;
         for p in pts.chunks_exact(stride) {
             let (x, y) = m.apply(p[0], p[1]);
             let (x, y) = (x.to_f64(), y.to_f64());
@@ -197,12 +208,13 @@ impl Sweep {
             if x * x + y * y > crop2 {
                 continue;
             }
+            here = here.min(x * x * ha + y * y * hb - 1.0);
             let (qx, qy) = (c * x + s * y, -s * x + c * y);
             let t = ((qx * sx * ia + qy * sy * ib) * inv_qs).clamp(0.0, 1.0);
             let (dx, dy) = (qx - t * sx, qy - t * sy);
             least = least.min(dx * dx * ia + dy * dy * ib - 1.0);
         }
-        least
+        (least, here)
     }
 }
 
@@ -244,8 +256,8 @@ mod tests {
         assert!(sw.growth <= TAIL + 1e-12, "a straight brake grows only by the tail: {}", sw.growth);
         // a wall point just past the stopping ellipse's nose passes, one inside fails
         let nose = x + 0.9;
-        assert!(sw.least_h(&[nose + 0.01, 0.0], 2, None, f64::INFINITY, None) > 0.0);
-        assert!(sw.least_h(&[nose - 0.01, 0.0], 2, None, f64::INFINITY, None) < 0.0);
+        assert!(sw.least_h(&[nose + 0.01, 0.0], 2, None, f64::INFINITY, None).0 > 0.0);
+        assert!(sw.least_h(&[nose - 0.01, 0.0], 2, None, f64::INFINITY, None).0 < 0.0);
     }
 
     #[test]
@@ -271,7 +283,7 @@ mod tests {
                 let e = k as f64 * std::f64::consts::TAU / 72.0;
                 let (ex, ey) = (0.999 * a * e.cos(), 0.999 * b * e.sin());
                 let p = [x + c * ex - s * ey, y + s * ex + c * ey];
-                assert!(sw.least_h(&p, 2, None, f64::INFINITY, None) < 0.0, "pose ({x}, {y}, {th}) leaves the sweep at {p:?}");
+                assert!(sw.least_h(&p, 2, None, f64::INFINITY, None).0 < 0.0, "pose ({x}, {y}, {th}) leaves the sweep at {p:?}");
             }
         }
     }

@@ -120,6 +120,11 @@ pub struct ShieldConfig {
     /// The body's tracker and control period, for the braking shield: its check replays
     /// them, and the tracker's `w_max` boxes the rotation.
     pub braking: BrakingModel,
+    /// How much more the braking shield's QP weighs a change of the rotation (rad/s) than
+    /// one of the velocity (m/s): `min ‖u − u_nom‖² + w² ‖ω − ω_nom‖²`. Large, it changes the
+    /// translation first, as the paper's filter does, and the turn only where the box leaves
+    /// no other way.
+    pub rotation_weight: f64,
 }
 
 impl Default for ShieldConfig {
@@ -135,6 +140,7 @@ impl Default for ShieldConfig {
             scan: ScanFilter::default(),
             grad_eps: 1e-9,
             braking: BrakingModel::default(),
+            rotation_weight: 4.0,
         }
     }
 }
@@ -388,6 +394,9 @@ impl Shield {
         }
         config.scan.validate()?;
         config.braking.validate()?;
+        if !(config.rotation_weight.is_finite() && (1e-3..=1e3).contains(&config.rotation_weight)) {
+            return Err(Error::invalid("rotation_weight", format!("must be from 1e-3 to 1e3, got {}", config.rotation_weight)));
+        }
         let dim = envelope.dim();
         Ok(Self {
             config,
@@ -478,16 +487,18 @@ impl Shield {
                     Some(m) => lim[..dim].copy_from_slice(m),
                     None => lim[..2].copy_from_slice(&t.v_max),
                 }
-                if dim == 2 {
-                    x_nom[2] = state.omega[2];
-                    row[2] = b.grad_omega[2];
-                    lim[2] = t.w_max;
-                } else {
-                    x_nom[3..6].copy_from_slice(&state.omega);
-                    row[3..6].copy_from_slice(&b.grad_omega);
-                    lim[3..6].fill(t.w_max);
+                // the rotation enters the QP as w·ω, so its distance counts w² times a speed's
+                let w = self.config.rotation_weight;
+                for k in 0..nw {
+                    let axis = if dim == 2 { 2 } else { k };
+                    x_nom[dim + k] = w * state.omega[axis];
+                    row[dim + k] = b.grad_omega[axis] / w;
+                    lim[dim + k] = w * t.w_max;
                 }
                 let mut sol = self.solve_row_n(&x_nom[..n], &row[..n], -alpha * b.value, &lim[..n], extra)?;
+                for k in dim..n {
+                    sol.u[k] /= w;
+                }
                 recovering = b.h_min < 0.0;
                 if dim == 2 && !recovering && b.num_points > 0 {
                     let v0 = *state.velocity.as_ref().ok_or_else(|| {
@@ -499,11 +510,11 @@ impl Shield {
                     let mut passed = None;
                     for scale in BRAKING_SCALES {
                         let sweep = self.config.braking.sweep(v0, [scale * cmd[0], scale * cmd[1], scale * sol.u[2]], [semi[0], semi[1]]);
-                        let h = self.sweep_least_h(scan, &sweep);
+                        let (h, here) = self.sweep_least_h(scan, &sweep);
                         if scale == 1.0 {
                             sweep_h = h;
                         }
-                        if h >= 0.0 {
+                        if h >= 0.0 || h >= here - braking::WORSE {
                             passed = Some(scale);
                             break;
                         }
@@ -727,7 +738,7 @@ impl Shield {
     }
 
     /// The braking check's least `h` over the points the composite used.
-    fn sweep_least_h(&self, scan: &Scan, sweep: &Sweep) -> f64 {
+    fn sweep_least_h(&self, scan: &Scan, sweep: &Sweep) -> (f64, f64) {
         if self.config.scan.downsamples() {
             // the down-sampled points (already moved, cropped and banded), as the barrier took them
             return match scan.points {
