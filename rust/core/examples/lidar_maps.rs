@@ -3,7 +3,7 @@
 //! `cargo bench -p shieldnav-core --bench lidar`, moves with it). The same scans as that bench:
 //! 48 per round, from each map's start, the poses of a robot pacing the 0.75 m in front of it
 //! (`benches/common.rs`'s `pacing`), none repeated within 100 rounds. With `--poses cycle16`,
-//! the 16 poses the benches cycled through until session 13 instead: the CPU's branch
+//! the 16 poses the benches cycled through earlier instead: the CPU's branch
 //! predictors learn that cycle, and those scans ran 10–30 % faster than a robot's would.
 //!
 //! The start is the map's most open place (the free cell farthest from any wall), where a scan
@@ -106,7 +106,7 @@ fn main() {
         (open().unwrap_or_else(|e| fail(format!("cannot write {}: {e}", path.display()))), path.clone())
     });
     let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let poses = if args.cycle16 { "the 16 poses of the benches until session 13, cycled" } else { "a robot pacing" };
+    let poses = if args.cycle16 { "the 16 poses of the benches earlier, cycled" } else { "a robot pacing" };
     println!("range {} m, contours simplified within {} cells, least and median of {} rounds of {SCANS_PER_ROUND} scans, {poses}", args.range, args.simplify, args.rounds);
     println!("{:<22} {:>6} {:>9} {:>9}  what the last scan did", "map", "walls", "least µs", "median µs");
     for dir in dirs {

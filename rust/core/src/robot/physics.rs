@@ -623,7 +623,7 @@ const NEAR_GROW: Real = 0.08;
 /// rapier step whose solver is substepped as often (contacts found once, at the step's start),
 /// and kept if the footprint ends no deeper than [`DEEP_CONTACT`] in any wall or obstacle,
 /// which [`PhysicsScene::step`] measures exactly at every step's end; otherwise the robot and
-/// the obstacles go back to the step's start and the step is split. Session 26: the physics
+/// the obstacles go back to the step's start and the step is split. Measured: the physics
 /// bench's steps pressed into walls reach 1.06 cm (two rapier steps); taken coarse, 1.27
 /// rapier steps per step instead of 1.97. Taking every step coarse first kept the contacts
 /// rigid, but stale contacts hold the robot back where it only passes by a corner: steps that
@@ -648,7 +648,7 @@ const PREDICTION_MARGIN: Real = 0.01;
 /// With the robot's box, grown by half the last rapier step's prediction (at least
 /// [`PREDICTION_MARGIN`]), every wall within a rapier step's prediction is paired with the robot
 /// while that is at most 5.5 cm: for steps closing in by up to `MAX_SUBSTEPS` × 4.5 cm = 2.9 m
-/// (29 m/s at 0.1 s). Before session 24 it was 0.6: the robot driving down a 1.2 m lane was
+/// (29 m/s at 0.1 s). At 0.6 the robot driving down a 1.2 m lane was
 /// paired with both walls, and rapier's narrow phase tested them every step (a fifth of a
 /// free step's time).
 const WALL_PREDICTION: Real = 0.1;
