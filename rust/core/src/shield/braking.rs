@@ -86,7 +86,8 @@ impl BrakingModel {
         let mut path: Vec<[f64; 2]> = Vec::with_capacity(96);
         path.push([0.0, 0.0]);
         let (mut th_lo, mut th_hi) = (0.0f64, 0.0f64);
-        let mut v = t.next_velocity(v0, command, gain, dt).0;
+        let first_velocity = t.next_velocity(v0, command, gain, dt).0;
+        let mut v = first_velocity;
         let mut steps = 0;
         // what the lag alone can still add once the acceleration limits no longer bind:
         // a geometric tail of `|v| dt (1 − gain) / gain`, bounded by `|v| dt / gain`
@@ -134,7 +135,7 @@ impl BrakingModel {
             semi_axes: grown,
             growth: rho,
             here: grow(semi_axes[0], semi_axes[1], self.margin),
-            first_velocity: t.next_velocity(v0, command, gain, dt).0,
+            first_velocity,
             steps,
         }
     }
