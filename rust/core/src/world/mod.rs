@@ -20,7 +20,7 @@ mod scenario;
 mod sim;
 pub mod traverse;
 
-pub use contour::simplify_walls;
+pub use contour::{simplify_walls, thin_corner};
 pub use geometry::{cross2, norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
 pub use index::SegmentIndex;
 pub use map::StaticMap;

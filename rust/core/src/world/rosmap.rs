@@ -24,7 +24,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::contour::simplify_walls;
+use super::contour::{simplify_walls, thin_corner};
 use super::geometry::Pose2;
 use super::grid::{Cell, OccupancyGrid};
 use super::map::StaticMap;
@@ -736,22 +736,31 @@ pub fn load_ros_map(yaml: impl AsRef<Path>, options: &RosMapOptions) -> Result<R
     let unknown_is_wall = options.unknown_is_wall;
     let solid = |c: Cell| c == Cell::Occupied || (unknown_is_wall && c == Cell::Unknown);
     // the space beyond the image is unknown: a wall where it is solid and meets an open cell
-    let walls = if options.unreachable_walls {
-        walls_beyond(&grid, Cell::Unknown, solid, options.wall_height, true)?
-    } else {
-        let cell = grid.world_to_cell([start.x, start.y]).ok_or_else(|| Error::map_file(yaml, "map", "the start lies off the grid"))?;
-        let region = FreeRegion::through(&grid, cell, [!solid(Cell::Free), !solid(Cell::Occupied), !solid(Cell::Unknown)]);
-        // cells off the region are solid; so is the space beyond the image when unknown cells
-        // are (otherwise the region runs on off the image and its border is no wall)
-        walls_beyond(&region.as_grid(&grid)?, Cell::Occupied, |c| c != Cell::Free, options.wall_height, unknown_is_wall)?
-    };
+    // (with `unreachable_walls`, of the image; else of the region through the start)
+    let cell = grid.world_to_cell([start.x, start.y]).ok_or_else(|| Error::map_file(yaml, "map", "the start lies off the grid"))?;
+    // cells off the region are solid; so is the space beyond the image when unknown cells are
+    // (otherwise the region runs on off the image and its border is no wall)
+    let region = FreeRegion::through(&grid, cell, [!solid(Cell::Free), !solid(Cell::Occupied), !solid(Cell::Unknown)]).as_grid(&grid)?;
+    let walls = walls_beyond(&region, Cell::Occupied, |c| c != Cell::Free, options.wall_height, unknown_is_wall)?;
     // chains break where two solid cells meet only at a corner, in either mode alike
     let is_solid = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < grid.width && (j as usize) < grid.height && solid(grid.get(i as usize, j as usize));
     let pinch = |(i, j): (i64, i64)| {
         let (a, b, c, d) = (is_solid(i - 1, j - 1), is_solid(i, j - 1), is_solid(i - 1, j), is_solid(i, j));
         a == d && b == c && a != b
     };
-    map.segments = simplify_walls(&grid, &walls, options.simplify, pinch)?;
+    // solids one cell thick, in the image or off the region, keep their thickness
+    let off_region = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < grid.width && (j as usize) < grid.height && region.get(i as usize, j as usize) != Cell::Free;
+    let thin = |v| thin_corner(is_solid, v) || thin_corner(off_region, v);
+    map.segments = simplify_walls(&grid, &walls, options.simplify, pinch, thin)?;
+    if options.unreachable_walls {
+        // the walls the region cannot reach, simplified apart: the region's own walls, and so
+        // every scan from inside it, are the same in either mode
+        let key = |s: &super::Segment| [s.a[0], s.a[1], s.b[0], s.b[1]].map(Real::to_bits);
+        let reachable: std::collections::HashSet<_> = walls.iter().map(key).collect();
+        let mut rest = walls_beyond(&grid, Cell::Unknown, solid, options.wall_height, true)?;
+        rest.retain(|s| !reachable.contains(&key(s)));
+        map.segments.extend(simplify_walls(&grid, &rest, options.simplify, pinch, thin)?);
+    }
     let name = yaml.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let scenario = Scenario::new(name, map, start);
     Ok(RosMap { meta, grid, scenario, start_clearance })
