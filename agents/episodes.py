@@ -27,7 +27,7 @@ def load_policy(spec: str, env: gym.Env[Any, Any]) -> tuple[Policy, Callable[[],
     model (``*.zip``, PPO or SAC), or ``"module:callable"`` where ``callable(env)`` returns
     ``act(obs, info) -> action`` (and may have a ``reset()``)."""
     if spec == "scripted":
-        from agents.scripted import InspectionAgent
+        from shieldnav.scripted import InspectionAgent
 
         agent = InspectionAgent(env)
         return agent.act, agent.reset

@@ -1,14 +1,17 @@
 """Train PPO or SAC (stable-baselines3) on the corridor environments, with the shield in the
-loop (the policy's command is filtered during training, ``--shield composite``) or without
-(``--shield none``).
+loop (the policy's command is filtered during training; ``--shield braking``, the default) or
+without (``--shield none``).
 
 Training runs on the native Rust batch (``shieldnav.sb3.ShieldnavVecEnv``, no subprocesses).
 An evaluation callback runs deterministic episodes on a separate environment and logs return,
 episodes with contact, deadlock rate and coverage; checkpoints and TensorBoard logs (or, without
 TensorBoard, ``progress.csv``) go to the run folder, and ``model.zip`` is what ``python -m agents.benchmark --policy`` loads.
+Safety over every training step (contact steps, episodes with contact, interventions,
+infeasible, braked and recovering steps) is logged as ``train_safety/*`` and kept in
+``run.json`` under ``training_safety``.
 
-    python -m agents.train --algo ppo --env shieldnav/CorridorInspection-v0 --shield composite \\
-        --timesteps 200000 --num-envs 8 --seed 0 --out runs/ppo_composite
+    python -m agents.train --algo ppo --env shieldnav/CorridorInspection-v0 --shield braking \\
+        --timesteps 300000 --num-envs 8 --seed 0 --out runs/ppo_braking
 """
 
 from __future__ import annotations
@@ -102,6 +105,41 @@ class EvalSafety(BaseCallback):
         return True
 
 
+class TrainingSafety(BaseCallback):
+    """Safety over every training step, not only evaluation: contact steps (the sum of
+    ``info["cost"]``), episodes with contact, shield interventions (steps where the shield
+    changed the command), infeasible, braked and recovering steps. Logged as ``train_safety/*``
+    and kept in ``totals``."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.totals = {k: 0 for k in ("steps", "contact_steps", "episodes", "episodes_with_contact", "interventions",
+                                       "infeasible_steps", "braked_steps", "recovering_steps")}
+        self._touched: np.ndarray | None = None
+
+    def _on_step(self) -> bool:
+        infos, dones = self.locals["infos"], self.locals["dones"]
+        if self._touched is None:
+            self._touched = np.zeros(len(infos), dtype=bool)
+        t = self.totals
+        for i, info in enumerate(infos):
+            cost = info.get("cost", 0.0) > 0.0
+            t["steps"] += 1
+            t["contact_steps"] += int(cost)
+            t["interventions"] += int(info.get("intervention", 0.0) > 1e-9)
+            t["infeasible_steps"] += int(not info.get("shield_feasible", True))
+            t["braked_steps"] += int(info.get("shield_braked", False))
+            t["recovering_steps"] += int(info.get("shield_recovering", False))
+            self._touched[i] |= cost
+            if dones[i]:
+                t["episodes"] += 1
+                t["episodes_with_contact"] += int(self._touched[i])
+                self._touched[i] = False
+        for k, v in t.items():
+            self.logger.record(f"train_safety/{k}", v)
+        return True
+
+
 def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, seed: int, out: Path,
           eval_every: int = 10_000, eval_episodes: int = 3, tensorboard: bool = True, progress: bool = True,
           max_episode_steps: int | None = None, **env_kwargs: Any) -> Path:
@@ -151,12 +189,13 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
         model.set_logger(configure_logger(str(out), ["csv"]))
     evaluator = EvalSafety(env_id, eval_every, eval_episodes, seed + 10_000, eval_kwargs)
     checkpoints = CheckpointCallback(save_freq=max(eval_every // num_envs, 1), save_path=str(out / "checkpoints"), name_prefix=algo)
-    model.learn(timesteps, callback=CallbackList([evaluator, checkpoints]), progress_bar=progress, tb_log_name=f"{algo}_{shield}")
+    safety = TrainingSafety()
+    model.learn(timesteps, callback=CallbackList([safety, evaluator, checkpoints]), progress_bar=progress, tb_log_name=f"{algo}_{shield}")
     model.logger.close()  # flushes and closes the log files
     path = out / "model.zip"
     model.save(path)
     meta = {"algo": algo, "env_id": env_id, "shield": shield, "timesteps": timesteps, "num_envs": num_envs, "seed": seed,
-            "eval": evaluator.history, "env_kwargs": env_kwargs}
+            "training_safety": safety.totals, "eval": evaluator.history, "env_kwargs": env_kwargs}
     (out / "run.json").write_text(json.dumps(meta, indent=1))
     venv.close()
     return path
@@ -166,7 +205,7 @@ def main(argv: list[str] | None = None) -> Path:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
     ap.add_argument("--env", type=benchmark.env_id, default="shieldnav/CorridorInspection-v0")
-    ap.add_argument("--shield", default="composite", choices=benchmark.SHIELDS)
+    ap.add_argument("--shield", default="braking", choices=benchmark.SHIELDS)
     ap.add_argument("--timesteps", type=benchmark.positive_int, default=200_000)
     ap.add_argument("--num-envs", type=benchmark.positive_int, default=8)
     ap.add_argument("--seed", type=seed_number, default=0)
@@ -182,7 +221,9 @@ def main(argv: list[str] | None = None) -> Path:
     out = Path(args.out or f"runs/{args.algo}_{args.shield}_{args.seed}")
     path = train(args.algo, args.env, args.shield, args.timesteps, args.num_envs, args.seed, out, args.eval_every,
                  args.eval_episodes, not args.no_tensorboard, not args.no_progress, args.max_episode_steps)
-    print(f"saved {path}")
+    totals = json.loads((path.parent / "run.json").read_text())["training_safety"]
+    print(f"saved {path}; during training: {totals['contact_steps']} contact steps, "
+          f"{totals['episodes_with_contact']} of {totals['episodes']} episodes with contact")
     return path
 
 

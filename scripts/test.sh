@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs what is needed and runs the whole test suite: cargo tests, then pytest. Both build
-# with the `ci` profile (Cargo.toml), so the extension and the tests share one dependency build.
+# with the `ci` profile (Cargo.toml), so the extension and the tests share one dependency build;
+# it lives in .venv-test, apart from the release build ./scripts/main.sh makes in .venv. The
+# test extras include torch (about 5 GB with its CUDA wheels) for the training smoke test.
 set -euo pipefail
-export MATURIN_PEP517_ARGS="--profile ci"
-source "$(dirname "$0")/env.sh" test
+source "$(dirname "$0")/env.sh" .venv-test test ci
 echo "== installed in ${SECONDS} s; cargo test (rust/core) =="
 cargo test --quiet --profile ci
 echo "== ${SECONDS} s; pytest =="

@@ -88,7 +88,7 @@ def failing_act(env):
     (["--shields", "none", "none"], "argument --shields: none given more than once"),
     (["--policy", "nonsense"], "argument --policy: invalid `policy`: expected 'scripted'"),
     (["--policy", "nosuch.mod:f"], "argument --policy: invalid `policy`: cannot import the module 'nosuch.mod'"),
-    (["--policy", "agents.scripted:nosuch"], "argument --policy: invalid `policy`: the module 'agents.scripted' has no 'nosuch'"),
+    (["--policy", "shieldnav.scripted:nosuch"], "argument --policy: invalid `policy`: the module 'shieldnav.scripted' has no 'nosuch'"),
     (["--policy", "missing.zip"], "the model file missing.zip does not exist"),
     (["--policy", "os:getcwd"], "argument --policy: invalid `policy`: os:getcwd(env) raised TypeError"),
     (["--policy", "tests.test_benchmark:raising_factory"],
@@ -113,7 +113,7 @@ def test_user_errors_are_usage_errors_naming_the_option_before_any_episode(args,
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("module", ["agents.report", "agents.episodes", "agents.scripted"])
+@pytest.mark.parametrize("module", ["agents.report", "agents.episodes"])
 def test_library_modules_say_which_modules_are_command_lines(module):
     root = Path(__file__).resolve().parents[1]
     done = subprocess.run([sys.executable, "-m", module, "--help"], cwd=root, capture_output=True, text=True, timeout=60)

@@ -153,16 +153,14 @@ def console_script():
     return script
 
 
-def test_console_script_runs_the_scripted_policy_from_the_repository_root(tmp_path):
+def test_console_script_runs_the_scripted_policy_anywhere(tmp_path):
+    # the scripted agent ships in the package: no repository on the path
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     argv = [console_script(), "run", "shieldnav/ConstrictedPassage-v0", "--policy", "scripted", "--steps", "5"]
-    done = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
-    assert json.loads(done.stdout)["steps"] == 5
-    # elsewhere the advice is the one that works
-    done = subprocess.run(argv, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
-    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
-    assert done.stderr.startswith("shieldnav: error: invalid `--policy scripted`:") and "run from the repository root" in done.stderr
+    for cwd in (ROOT, tmp_path):
+        done = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        assert json.loads(done.stdout)["steps"] == 5
 
 
 @pytest.mark.parametrize("argv, message", [

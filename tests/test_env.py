@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import shieldnav
-from agents.scripted import InspectionAgent
+from shieldnav.scripted import InspectionAgent
 from shieldnav import ENV_IDS, InvalidArgumentError, Shield
 
 ALL_IDS = sorted(ENV_IDS)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import shieldnav  # noqa: F401
-from agents.scripted import InspectionAgent
+from shieldnav.scripted import InspectionAgent
 from shieldnav import InvalidArgumentError, Shield
 
 

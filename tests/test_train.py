@@ -40,6 +40,11 @@ def test_ppo_trains_saves_reloads_and_is_benchmarked_identically_twice(tmp_path)
         assert "eval/coverage" in logged[0].split(",") and len(logged) > 1, "no log in the run folder"
         meta = json.loads((tmp_path / run / "run.json").read_text())
         assert [e["timesteps"] for e in meta["eval"]] == [1024, 2048]
+        # safety over every training step: each of the 2048 steps counted once
+        safety = meta["training_safety"]
+        assert safety["steps"] == 2048 and "train_safety/contact_steps" in logged[0].split(",")
+        assert 0 <= safety["episodes_with_contact"] <= safety["episodes"] >= 4 * (512 // 200)  # 4 envs, 200-step limit
+        assert safety["contact_steps"] >= safety["episodes_with_contact"] and 0 < safety["interventions"] <= 2048
         rows.append(benchmark.main([
             "--scenarios", "shieldnav/ConstrictedPassage-v0", "--shields", "composite", "--seeds", "1", "--workers", "1",
             "--policy", str(path), "--max-steps", "200", "--out", str(tmp_path / run / "bench"), "--no-plots",

@@ -14,6 +14,7 @@ from shieldnav.config import SHIELD_DEFAULTS
 from shieldnav.env import ENV_DEFAULTS, CorridorInspectionEnv
 from shieldnav.exceptions import InvalidArgumentError, MapFileError, ShieldnavError, SolverError
 from shieldnav.registration import ENV_IDS, register_envs
+from shieldnav.scripted import InspectionAgent
 
 register_envs()
 
@@ -23,6 +24,7 @@ __all__ = [
     "ENV_IDS",
     "CorridorInspectionEnv",
     "Episode",
+    "InspectionAgent",
     "SHIELD_DEFAULTS",
     "InvalidArgumentError",
     "MapFileError",

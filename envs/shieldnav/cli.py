@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import tempfile
 import warnings
@@ -88,28 +87,6 @@ def _check_video(path: str) -> None:
     _writable("--gif", path)
 
 
-def _inspection_agent() -> Any:
-    """The scripted agent's class from the repository's agents/ folder: found on the Python path
-    or, failing that, in the current folder (the console script's path lacks it)."""
-    try:
-        from agents.scripted import InspectionAgent
-    except ModuleNotFoundError as err:
-        if err.name not in ("agents", "agents.scripted"):
-            raise ValueError(f"invalid `--policy scripted`: cannot import the scripted agent: {err}") from err
-        cwd = os.getcwd()
-        sys.path.insert(0, cwd)
-        try:
-            from agents.scripted import InspectionAgent
-        except ModuleNotFoundError as again:
-            if again.name not in ("agents", "agents.scripted"):
-                raise ValueError(f"invalid `--policy scripted`: cannot import the scripted agent: {again}") from again
-            raise ValueError(f"invalid `--policy scripted`: the scripted agent lives in the repository's agents/ folder, found neither "
-                             f"on the Python path nor in the current folder {cwd}: run from the repository root or add it to PYTHONPATH") from err
-        finally:
-            sys.path.remove(cwd)
-    return InspectionAgent
-
-
 def _make(env_id: str, settings: dict[str, Any], render: bool, shield: str | None = None) -> Any:
     import gymnasium as gym
 
@@ -156,13 +133,14 @@ def cmd_run(args: argparse.Namespace) -> None:
     _at_least("--steps", args.steps, 1)
     if args.gif is not None:
         _check_video(args.gif)
-    agent_class = _inspection_agent() if args.policy == "scripted" else None
     env = _make(args.env_id, _settings(args.set), render=args.gif is not None, shield=args.shield)
     obs, info = env.reset(seed=args.seed)
     rng = np.random.default_rng(args.seed)
     agent = None
-    if agent_class is not None:
-        agent = agent_class(env)
+    if args.policy == "scripted":
+        from shieldnav.scripted import InspectionAgent
+
+        agent = InspectionAgent(env)
         agent.reset()
     frames = []
     steps = 0
@@ -237,7 +215,7 @@ def parser() -> argparse.ArgumentParser:
     u = sub.add_parser("run", help="run one episode and print its summary")
     u.add_argument("env_id")
     u.add_argument("--policy", choices=POLICIES, default="zero")
-    u.add_argument("--shield", default=None, help="composite, distance, hardmin or none (default: the env's)")
+    u.add_argument("--shield", default=None, help="braking, composite, distance, hardmin or none (default: the env's, braking)")
     u.add_argument("--seed", type=int, default=0)
     u.add_argument("--steps", type=int, default=None, help="stop after this many steps")
     u.add_argument("--gif", default=None, help="write a GIF of the episode (every 5th step)")

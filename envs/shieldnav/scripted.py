@@ -279,11 +279,3 @@ class InspectionAgent:
             dyaw = math.remainder(float(goal_yaw) - yaw, math.tau)
             a = [(c * dx + s * dy) / self._reach, (-s * dx + c * dy) / self._reach, dyaw / math.pi]
         return np.clip(np.asarray(a, dtype=np.float32), -1.0, 1.0)
-
-
-if __name__ == "__main__":  # a library module: say which modules are command lines
-    import sys
-
-    print("agents.scripted is not a command line; the command lines are python -m agents.train, agents.benchmark "
-          "and agents.sweep (each with --help)", file=sys.stderr)
-    sys.exit(2)
