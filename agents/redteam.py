@@ -195,7 +195,9 @@ def train_attacker(env_id: str, shield: str, timesteps: int, seed: int, out: Pat
             reward = np.array([10.0 * i["cost"] - min(i["clearance"], 1.0) for i in infos], dtype=np.float32)
             return obs, reward, done, infos
 
-    venv = AttackReward(ShieldnavVecEnv(env_id, num_envs=num_envs, shield=shield, seed=seed, terminate_at_goal=False, time_limit=750))
+    inner = ShieldnavVecEnv(env_id, num_envs=num_envs, shield=shield, terminate_at_goal=False, time_limit=750)
+    inner.seed(seed)
+    venv = AttackReward(inner)
     model = PPO("MlpPolicy", venv, seed=seed, n_steps=256, batch_size=512, device="cpu", verbose=0)
     model.learn(total_timesteps=timesteps, progress_bar=True)
     path = out / "attacker.zip"

@@ -34,6 +34,7 @@ use crate::robot::TrackerConfig;
 
 use super::composite::Motion;
 use super::lane::Lane;
+use crate::simd::SimdLevel;
 
 /// Longest brake replayed (control periods); the remaining displacement is bounded and added
 /// to the growth beyond it.
@@ -79,11 +80,17 @@ impl BrakingModel {
     /// The region the ellipse covers while the robot, at body velocity `v0`, holds
     /// `command` for one period and then brakes to a stop (current body frame).
     pub fn sweep(&self, v0: [f64; 3], command: [f64; 3], semi_axes: [f64; 2]) -> Sweep {
+        self.sweep_with(v0, command, semi_axes, &mut Vec::new())
+    }
+
+    /// [`BrakingModel::sweep`] with the replayed path kept in `path` (cleared first), a buffer
+    /// the caller reuses from call to call.
+    pub fn sweep_with(&self, v0: [f64; 3], command: [f64; 3], semi_axes: [f64; 2], path: &mut Vec<[f64; 2]>) -> Sweep {
         let t = &self.tracker;
         let dt = self.dt;
         let gain = t.gain(dt);
         let (mut x, mut y, mut th) = (0.0f64, 0.0f64, 0.0f64);
-        let mut path: Vec<[f64; 2]> = Vec::with_capacity(96);
+        path.clear();
         path.push([0.0, 0.0]);
         let (mut th_lo, mut th_hi) = (0.0f64, 0.0f64);
         let first_velocity = t.next_velocity(v0, command, gain, dt).0;
@@ -184,39 +191,90 @@ impl Sweep {
     /// The least `h` of `pts` (rows of `stride`, moved by `motion` first, those farther than
     /// `crop` or outside the height band skipped, as the composite skips them) against the
     /// swept ellipse, and against the standing robot's ([`Sweep::here`]); `f64::MAX` without
-    /// points. The points are checked finite by the composite pass before.
+    /// points.
     pub fn least_h<T: Lane>(&self, pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>) -> (f64, f64) {
-        let (s, c) = self.heading.sin_cos();
-        let (ia, ib) = (1.0 / (self.semi_axes[0] * self.semi_axes[0]), 1.0 / (self.semi_axes[1] * self.semi_axes[1]));
-        let (sx, sy) = (self.chord[0], self.chord[1]);
+        let ([least], here) = least_h_of(&[*self], pts, stride, motion, crop, band, SimdLevel::detect());
+        (least, here)
+    }
+}
+
+/// Points handled together by [`least_h_of`]: independent minima per lane, which the compiler
+/// keeps in vector registers.
+const LANES: usize = 8;
+
+/// [`Sweep::least_h`] for `K` sweeps of one check in one pass over the points: the least `h`
+/// against each sweep, and against the standing robot's ellipse (the first sweep's
+/// [`Sweep::here`]; every sweep of one check has the same). Skipped points count as `f64::MAX`,
+/// selected rather than branched over, so the loop vectorises (in AVX2 where `level` allows).
+pub fn least_h_of<T: Lane, const K: usize>(sweeps: &[Sweep; K], pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>, level: SimdLevel) -> ([f64; K], f64) {
+    #[cfg(target_arch = "x86_64")]
+    if level != SimdLevel::Portable && SimdLevel::Avx2.is_supported() {
+        // SAFETY: the CPU reports AVX2 and FMA, which this build enables.
+        return unsafe { least_h_avx2(sweeps, pts, stride, motion, crop, band) };
+    }
+    let _ = level;
+    least_h_body(sweeps, pts, stride, motion, crop, band)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn least_h_avx2<T: Lane, const K: usize>(sweeps: &[Sweep; K], pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>) -> ([f64; K], f64) {
+    least_h_body(sweeps, pts, stride, motion, crop, band)
+}
+
+#[inline(always)]
+fn least_h_body<T: Lane, const K: usize>(sweeps: &[Sweep; K], pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>) -> ([f64; K], f64) {
+    // per sweep: heading (cos, sin), 1/a², 1/b², the chord and 1 / (chordᵀ A chord)
+    let coeffs: [[f64; 7]; K] = std::array::from_fn(|k| {
+        let sw = &sweeps[k];
+        let (s, c) = sw.heading.sin_cos();
+        let (ia, ib) = (1.0 / (sw.semi_axes[0] * sw.semi_axes[0]), 1.0 / (sw.semi_axes[1] * sw.semi_axes[1]));
+        let (sx, sy) = (sw.chord[0], sw.chord[1]);
         let qs = sx * sx * ia + sy * sy * ib;
-        let inv_qs = if qs > 0.0 { 1.0 / qs } else { 0.0 };
-        let m = motion.unwrap_or(Motion { cos: 1.0, sin: 0.0, tx: 0.0, ty: 0.0 });
-        let crop2 = crop * crop;
-        let (z_lo, z_hi) = band.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-        let (ha, hb) = (1.0 / (self.here[0] * self.here[0]), 1.0 / (self.here[1] * self.here[1]));
-        let mut least = f64::MAX;
-        let mut here = f64::MAX;
-        for p in pts.chunks_exact(stride) {
-            let (x, y) = m.apply(p[0], p[1]);
-            let (x, y) = (x.to_f64(), y.to_f64());
-            if stride == 3 {
-                let z = p[2].to_f64();
-                if z < z_lo || z > z_hi {
-                    continue;
-                }
-            }
-            if x * x + y * y > crop2 {
-                continue;
-            }
-            here = here.min(x * x * ha + y * y * hb - 1.0);
+        [c, s, ia, ib, sx, sy, if qs > 0.0 { 1.0 / qs } else { 0.0 }]
+    });
+    let m = motion.unwrap_or(Motion { cos: 1.0, sin: 0.0, tx: 0.0, ty: 0.0 });
+    let crop2 = crop * crop;
+    let (z_lo, z_hi) = band.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+    let here_axes = sweeps.first().map_or([1.0; 2], |s| s.here);
+    let (ha, hb) = (1.0 / (here_axes[0] * here_axes[0]), 1.0 / (here_axes[1] * here_axes[1]));
+    let value = |p: &[T]| -> ([f64; K], f64) {
+        let (x, y) = m.apply(p[0], p[1]);
+        let (x, y) = (x.to_f64(), y.to_f64());
+        let z = if stride == 3 { p[2].to_f64() } else { 0.0 };
+        let skip = x * x + y * y > crop2 || z < z_lo || z > z_hi;
+        let least = std::array::from_fn(|k| {
+            let [c, s, ia, ib, sx, sy, inv_qs] = coeffs[k];
             let (qx, qy) = (c * x + s * y, -s * x + c * y);
             let t = ((qx * sx * ia + qy * sy * ib) * inv_qs).clamp(0.0, 1.0);
             let (dx, dy) = (qx - t * sx, qy - t * sy);
-            least = least.min(dx * dx * ia + dy * dy * ib - 1.0);
+            let h = dx * dx * ia + dy * dy * ib - 1.0;
+            if skip { f64::MAX } else { h }
+        });
+        let here = x * x * ha + y * y * hb - 1.0;
+        (least, if skip { f64::MAX } else { here })
+    };
+    let mut least = [[f64::MAX; LANES]; K];
+    let mut here = [f64::MAX; LANES];
+    let mut blocks = pts.chunks_exact(stride * LANES);
+    for block in &mut blocks {
+        for lane in 0..LANES {
+            let (l, h) = value(&block[lane * stride..(lane + 1) * stride]);
+            for k in 0..K {
+                least[k][lane] = least[k][lane].min(l[k]);
+            }
+            here[lane] = here[lane].min(h);
         }
-        (least, here)
     }
+    for p in blocks.remainder().chunks_exact(stride) {
+        let (l, h) = value(p);
+        for k in 0..K {
+            least[k][0] = least[k][0].min(l[k]);
+        }
+        here[0] = here[0].min(h);
+    }
+    let fold = |v: &[f64; LANES]| v.iter().copied().fold(f64::MAX, f64::min);
+    (std::array::from_fn(|k| fold(&least[k])), fold(&here))
 }
 
 #[cfg(test)]

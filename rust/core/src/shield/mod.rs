@@ -334,6 +334,8 @@ pub struct Shield {
     scratch: ScanScratch,
     buf32: Vec<f32>,
     buf64: Vec<f64>,
+    /// The braking check's replayed path, reused from call to call.
+    brake_path: Vec<[f64; 2]>,
     moved32: Vec<f32>,
     moved64: Vec<f64>,
     body: Vec<f64>,
@@ -405,6 +407,7 @@ impl Shield {
             scratch: ScanScratch::default(),
             buf32: Vec::new(),
             buf64: Vec::new(),
+            brake_path: Vec::new(),
             moved32: Vec::new(),
             moved64: Vec::new(),
             body: Vec::new(),
@@ -506,19 +509,23 @@ impl Shield {
                     })?;
                     let cmd = crate::math::mat_t_vec(&r, &[sol.u[0], sol.u[1], 0.0]);
                     let semi = self.envelope.semi_axes();
-                    // the row's command, else the largest of its fractions that passes, else the brake
-                    let mut passed = None;
-                    for scale in BRAKING_SCALES {
-                        let sweep = self.config.braking.sweep(v0, [scale * cmd[0], scale * cmd[1], scale * sol.u[2]], [semi[0], semi[1]]);
-                        let (h, here) = self.sweep_least_h(scan, &sweep);
-                        if scale == 1.0 {
-                            sweep_h = h;
-                        }
-                        if h >= 0.0 || h >= here - braking::WORSE {
-                            passed = Some(scale);
-                            break;
-                        }
+                    // the row's command, else the largest of its fractions that passes, else the
+                    // brake: the command's check in one pass over the points, its fractions'
+                    // together in a second
+                    let passes = |h: f64, here: f64| h >= 0.0 || h >= here - braking::WORSE;
+                    let model = self.config.braking;
+                    let mut path = std::mem::take(&mut self.brake_path);
+                    let w_cmd = sol.u[2];
+                    let mut sweep = |scale: f64| model.sweep_with(v0, [scale * cmd[0], scale * cmd[1], scale * w_cmd], [semi[0], semi[1]], &mut path);
+                    let ([h], here) = self.sweep_least_h(scan, &[sweep(1.0)]);
+                    sweep_h = h;
+                    let mut passed = passes(h, here).then_some(1.0);
+                    if passed.is_none() {
+                        let fractions = [sweep(BRAKING_SCALES[1]), sweep(BRAKING_SCALES[2]), sweep(BRAKING_SCALES[3])];
+                        let (hs, here) = self.sweep_least_h(scan, &fractions);
+                        passed = (0..3).find(|&k| passes(hs[k], here)).map(|k| BRAKING_SCALES[k + 1]);
                     }
+                    self.brake_path = path;
                     match passed {
                         Some(1.0) => {}
                         Some(scale) => {
@@ -738,19 +745,19 @@ impl Shield {
     }
 
     /// The braking check's least `h` over the points the composite used.
-    fn sweep_least_h(&self, scan: &Scan, sweep: &Sweep) -> (f64, f64) {
+    fn sweep_least_h<const K: usize>(&self, scan: &Scan, sweeps: &[Sweep; K]) -> ([f64; K], f64) {
         if self.config.scan.downsamples() {
             // the down-sampled points (already moved, cropped and banded), as the barrier took them
             return match scan.points {
-                Points::F32(_) => sweep.least_h(&self.buf32, self.dim(), None, f64::INFINITY, None),
-                Points::F64(_) => sweep.least_h(&self.buf64, self.dim(), None, f64::INFINITY, None),
+                Points::F32(_) => braking::least_h_of(sweeps, &self.buf32, self.dim(), None, f64::INFINITY, None, self.level),
+                Points::F64(_) => braking::least_h_of(sweeps, &self.buf64, self.dim(), None, f64::INFINITY, None, self.level),
             };
         }
         let crop = self.config.scan.crop_radius.unwrap_or(f64::INFINITY);
         let band = if scan.stride == 3 { self.config.scan.height_band } else { None };
         match scan.points {
-            Points::F32(p) => sweep.least_h(p, scan.stride, scan.motion, crop, band),
-            Points::F64(p) => sweep.least_h(p, scan.stride, scan.motion, crop, band),
+            Points::F32(p) => braking::least_h_of(sweeps, p, scan.stride, scan.motion, crop, band, self.level),
+            Points::F64(p) => braking::least_h_of(sweeps, p, scan.stride, scan.motion, crop, band, self.level),
         }
     }
 
