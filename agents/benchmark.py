@@ -35,13 +35,12 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Iterator
 
-import numpy as np
+from shieldnav.exceptions import InvalidArgumentError
+from shieldnav.registration import ENV_IDS
 from tqdm import tqdm
 
 from agents import report
 from agents.episodes import check_policy, run_episode
-from shieldnav.exceptions import InvalidArgumentError
-from shieldnav.registration import ENV_IDS
 
 SHIELDS = ["braking", "composite", "distance", "hardmin", "none"]
 PAPER = ["shieldnav/ConstrictedPassage-v0", "shieldnav/OdometryJump-v0", "shieldnav/DynamicObstacles-v0"]

@@ -15,7 +15,6 @@ from typing import Any, Callable
 
 import gymnasium as gym
 import numpy as np
-
 import shieldnav  # noqa: F401  (registers the ids)
 from shieldnav.exceptions import InvalidArgumentError
 

@@ -39,15 +39,14 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Iterator
 
 import gymnasium as gym
 import numpy as np
+import shieldnav  # noqa: F401  (registers the ids)
 from tqdm import tqdm
 
-import shieldnav  # noqa: F401  (registers the ids)
 from agents.benchmark import check_options, output_folder, positive_int
-from shieldnav.registration import ENV_IDS
 
 ATTACKERS = ["held", "seeker", "skimmer", "ppo"]
 SHIELDS = ["braking", "composite"]
@@ -181,10 +180,9 @@ def run_ray(todo: list[dict[str, Any]], address: str | None, workers: int) -> It
 def train_attacker(env_id: str, shield: str, timesteps: int, seed: int, out: Path, num_envs: int) -> Path:
     """PPO trained under ``shield`` with a reward for contact (+10 a step) and for low
     clearance (``−clearance``, capped at 1 m): the strongest learned attacker we build."""
+    from shieldnav.sb3 import ShieldnavVecEnv
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecEnvWrapper
-
-    from shieldnav.sb3 import ShieldnavVecEnv
 
     class AttackReward(VecEnvWrapper):  # type: ignore[misc]
         def reset(self) -> Any:

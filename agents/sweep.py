@@ -34,9 +34,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from shieldnav.registration import ENV_IDS
 
 from agents import benchmark, report
-from shieldnav.registration import ENV_IDS
 
 EXPERIMENTS = ["conservatism", "kappa", "gamma", "points", "rates"]
 SCENARIOS = benchmark.PAPER + ["shieldnav/CorridorInspection-v0"]

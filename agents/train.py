@@ -24,7 +24,6 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-
 import shieldnav  # noqa: F401  (registers the ids)
 from shieldnav.exceptions import InvalidArgumentError
 
@@ -37,9 +36,10 @@ try:
 except ImportError as err:  # pragma: no cover
     raise ImportError('training needs stable-baselines3 and torch: pip install "shieldnav[train]"') from err
 
-from agents import benchmark
 from shieldnav.registration import ENV_IDS
 from shieldnav.sb3 import ShieldnavVecEnv
+
+from agents import benchmark
 
 ALGOS = {"ppo": PPO, "sac": SAC}
 #: Seeds SB3 accepts are below this (it seeds NumPy's global generator).

@@ -19,9 +19,8 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from tqdm import tqdm
-
 import shieldnav
+from tqdm import tqdm
 
 IDS = ["shieldnav/CorridorInspection-v0", "shieldnav/ConstrictedPassage-v0", "shieldnav/OdometryJump-v0",
        "shieldnav/DynamicObstacles-v0", "shieldnav/MapInspection-v0"]

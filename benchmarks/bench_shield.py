@@ -16,9 +16,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
-
 from shieldnav import Shield
+from tqdm import tqdm
 
 SIZES = [100, 400, 800, 1300, 5000, 20_000]
 

@@ -27,7 +27,6 @@ def main() -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
-
     from shieldnav import World
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 6.2), constrained_layout=True)

@@ -68,7 +68,6 @@ def main() -> None:
     from matplotlib.collections import LineCollection
     from matplotlib.colors import TwoSlopeNorm
     from matplotlib.lines import Line2D
-
     from shieldnav import World
 
     all_us = [t[3] for n in names for t in times[n]]

@@ -5,7 +5,10 @@
 # test extras include torch (about 5 GB with its CUDA wheels) for the training smoke test.
 set -euo pipefail
 source "$(dirname "$0")/env.sh" .venv-test test ci
-echo "== installed in ${SECONDS} s; cargo test (rust/core) =="
+echo "== installed in ${SECONDS} s; cargo fmt --check, ruff check =="
+cargo fmt --check
+ruff check envs agents tests benchmarks
+echo "== ${SECONDS} s; cargo test (rust/core) =="
 cargo test --quiet --profile ci
 echo "== ${SECONDS} s; pytest =="
 python -m pytest -q --durations=8 tests

@@ -183,9 +183,10 @@ def test_steps_per_s_leaves_out_the_video_frames(monkeypatch):
     comparable with an episode without frames (timing the rendering made it 20-80 times
     slower). Checked on a fake clock that a step advances by 1 s and drawing a frame by 1000 s:
     exactly 1 step/s means no drawing was timed."""
-    from agents import episodes
     from shieldnav.env import CorridorInspectionEnv
     from shieldnav.rendering import TopDownRenderer
+
+    from agents import episodes
 
     clock = [0.0]
 

@@ -4,10 +4,10 @@ and a short red-team run (the full one is `python -m agents.redteam`)."""
 import gymnasium as gym
 import numpy as np
 import pytest
-
 import shieldnav  # noqa: F401
-from agents import redteam
 from shieldnav import InvalidArgumentError, Shield
+
+from agents import redteam
 
 
 def wall_ahead(distance, n=200):

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
-
 from shieldnav import Shield, cli
 from shieldnav.cli import main
 

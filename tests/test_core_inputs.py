@@ -11,7 +11,6 @@ import time
 
 import numpy as np
 import pytest
-
 from shieldnav import InvalidArgumentError, World
 from shieldnav._core import Batch, Episode
 

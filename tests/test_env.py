@@ -9,10 +9,9 @@ import sys
 import gymnasium as gym
 import numpy as np
 import pytest
-
 import shieldnav
-from shieldnav.scripted import InspectionAgent
 from shieldnav import ENV_IDS, InvalidArgumentError, Shield
+from shieldnav.scripted import InspectionAgent
 
 ALL_IDS = sorted(ENV_IDS)
 

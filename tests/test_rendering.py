@@ -8,10 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
-
 from shieldnav.exceptions import InvalidArgumentError, ShieldnavError
-from shieldnav.rendering import (COLORS, HumanWindow, RenderFrame, TopDownRenderer, fit_bounds,
-                                 save_video)
+from shieldnav.rendering import COLORS, HumanWindow, RenderFrame, TopDownRenderer, fit_bounds, save_video
 
 # 200x200 px over 10 m: 20 px/m, the robot at the origin is at pixel (col 100, row 100).
 SIZE, PPM = 200, 20

@@ -8,10 +8,9 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-
 import shieldnav  # noqa: F401
-from shieldnav.scripted import InspectionAgent
 from shieldnav import InvalidArgumentError, Shield
+from shieldnav.scripted import InspectionAgent
 
 
 def corridor_points(width: float, length: float = 12.0, spacing: float = 0.02) -> np.ndarray:

@@ -3,10 +3,9 @@ paper's equations, the guarantees of Sec. III, and clear errors on bad input."""
 
 import numpy as np
 import pytest
+import shieldnav
 from conftest import corridor
 from reference_shield import rot_z, shield_filter
-
-import shieldnav
 from shieldnav import SHIELD_DEFAULTS, InvalidArgumentError, Shield
 
 

@@ -3,7 +3,6 @@ whose outcome the composite's ln(N)/κ term decides."""
 
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np

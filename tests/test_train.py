@@ -17,9 +17,10 @@ import pytest
 
 pytest.importorskip("torch")
 
-from agents import benchmark, train  # noqa: E402
 from shieldnav.exceptions import InvalidArgumentError  # noqa: E402
 from shieldnav.sb3 import ShieldnavVecEnv  # noqa: E402
+
+from agents import benchmark, train  # noqa: E402
 
 COUNTS = {"timesteps": "--timesteps", "num_envs": "--num-envs", "eval_every": "--eval-every", "eval_episodes": "--eval-episodes",
           "max_episode_steps": "--max-episode-steps"}

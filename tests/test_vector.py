@@ -6,7 +6,6 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-
 import shieldnav  # noqa: F401
 from shieldnav import InvalidArgumentError
 from shieldnav.vector import CorridorInspectionVectorEnv

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from shieldnav import World
 
 MAPS = Path(__file__).resolve().parents[1].parent / "shared" / "maps"

@@ -6,7 +6,6 @@ import json
 import gymnasium as gym
 import numpy as np
 import pytest
-
 import shieldnav  # noqa: F401  (registers the ids)
 from shieldnav import InvalidArgumentError, World
 

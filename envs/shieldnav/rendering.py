@@ -326,7 +326,8 @@ class HumanWindow:
             driver = pygame.display.get_driver()
             if driver in ("offscreen", "dummy") and os.environ.get("SDL_VIDEODRIVER") != driver:
                 pygame.display.quit()
-                raise ShieldnavError(f"render_mode='human' needs a display (SDL found none and chose {driver!r}); use render_mode='rgb_array' and save the frames (shieldnav.rendering.save_video), or set SDL_VIDEODRIVER={driver} to draw nowhere on purpose")
+                raise ShieldnavError(f"render_mode='human' needs a display (SDL found none and chose {driver!r}); use render_mode='rgb_array' and save the "
+                                     f"frames (shieldnav.rendering.save_video), or set SDL_VIDEODRIVER={driver} to draw nowhere on purpose")
             self._pg, self._clock = pygame, pygame.time.Clock()
             self._screen = pygame.display.set_mode((self.width, self.height))
             pygame.display.set_caption("shieldnav")

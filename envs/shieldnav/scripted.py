@@ -42,7 +42,6 @@ from shieldnav import NominalController, Shield, ViewPlanner
 from shieldnav.env import CorridorInspectionEnv
 from shieldnav.exceptions import InvalidArgumentError
 
-
 #: Yaw changes tried, in order, when the planned view pose does not fit (rad).
 _TURNS = np.radians([0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0])
 

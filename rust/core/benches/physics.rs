@@ -11,11 +11,7 @@ use shieldnav_core::world::{preset, MovingObstacle, Polygon, Pose2, Trajectory};
 fn bench(c: &mut Criterion) {
     let s = preset("dynamic_obstacles").unwrap();
     let mut obstacles = s.obstacles.clone();
-    obstacles.push(MovingObstacle {
-        name: "pedestrian".into(),
-        shape: Polygon::rect(-0.2, -0.25, 0.2, 0.25, 1.8),
-        trajectory: Trajectory::walk(&[[25.0, 0.3], [2.0, 0.3]], 1.2, 0.0).unwrap(),
-    });
+    obstacles.push(MovingObstacle { name: "pedestrian".into(), shape: Polygon::rect(-0.2, -0.25, 0.2, 0.25, 1.8), trajectory: Trajectory::walk(&[[25.0, 0.3], [2.0, 0.3]], 1.2, 0.0).unwrap() });
     let mut scene = PhysicsScene::new(RobotShape::default(), &s.map.segments, &obstacles, s.start, 0.0).unwrap();
     let mut t = 0.0;
     c.bench_function(&format!("physics_step_robot_{}walls_{}movers", s.map.segments.len(), obstacles.len()), |b| {

@@ -15,10 +15,7 @@ use common::{corridor_scan, SIZES};
 
 fn shield(dim: usize, method: ShieldMethod, level: SimdLevel) -> Shield {
     let axes = if dim == 2 { vec![0.9, 0.45] } else { vec![0.9, 0.45, 0.3] };
-    Shield::new(ShieldConfig { semi_axes: axes, method, u_max: Some(vec![1.0; dim]), ..ShieldConfig::default() })
-        .unwrap()
-        .with_simd_level(level)
-        .unwrap()
+    Shield::new(ShieldConfig { semi_axes: axes, method, u_max: Some(vec![1.0; dim]), ..ShieldConfig::default() }).unwrap().with_simd_level(level).unwrap()
 }
 
 fn state(dim: usize) -> BodyState {

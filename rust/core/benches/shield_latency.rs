@@ -26,29 +26,33 @@ fn main() {
     println!("| method | dim | N | median µs | p99.6 µs | max µs | SIMD |");
     println!("|---|---|---:|---:|---:|---:|---|");
     for method in [ShieldMethod::Composite, ShieldMethod::Braking] {
-    for dim in [2usize, 3] {
-        for &n in &SIZES {
-            let axes = if dim == 2 { vec![0.9, 0.45] } else { vec![0.9, 0.45, 0.3] };
-            let mut s = Shield::new(ShieldConfig { semi_axes: axes, u_max: Some(vec![1.0; dim]), method, ..ShieldConfig::default() }).unwrap().with_simd_level(level).unwrap();
-            let pts: Vec<f32> = corridor_scan(n, dim, 7).iter().map(|&v| v as f32).collect();
-            let scan = Scan::new_f32(&pts, dim).unwrap();
-            let st = if dim == 2 { BodyState::planar(0.3, 0.2).unwrap().with_velocity([1.0, 0.0, 0.2]).unwrap() } else { BodyState::spatial(shieldnav_core::math::rot_z(0.3), [0.0, 0.0, 0.2]).unwrap() };
-            let u_nom = vec![0.8; dim];
-            let calls = (2_000_000 / n).clamp(2_000, 100_000);
-            for _ in 0..calls / 10 {
-                black_box(s.filter(&scan, &st, &u_nom).unwrap());
+        for dim in [2usize, 3] {
+            for &n in &SIZES {
+                let axes = if dim == 2 { vec![0.9, 0.45] } else { vec![0.9, 0.45, 0.3] };
+                let mut s = Shield::new(ShieldConfig { semi_axes: axes, u_max: Some(vec![1.0; dim]), method, ..ShieldConfig::default() }).unwrap().with_simd_level(level).unwrap();
+                let pts: Vec<f32> = corridor_scan(n, dim, 7).iter().map(|&v| v as f32).collect();
+                let scan = Scan::new_f32(&pts, dim).unwrap();
+                let st = if dim == 2 {
+                    BodyState::planar(0.3, 0.2).unwrap().with_velocity([1.0, 0.0, 0.2]).unwrap()
+                } else {
+                    BodyState::spatial(shieldnav_core::math::rot_z(0.3), [0.0, 0.0, 0.2]).unwrap()
+                };
+                let u_nom = vec![0.8; dim];
+                let calls = (2_000_000 / n).clamp(2_000, 100_000);
+                for _ in 0..calls / 10 {
+                    black_box(s.filter(&scan, &st, &u_nom).unwrap());
+                }
+                let mut t: Vec<u64> = (0..calls)
+                    .map(|_| {
+                        let t0 = Instant::now();
+                        black_box(s.filter(black_box(&scan), &st, black_box(&u_nom)).unwrap());
+                        t0.elapsed().as_nanos() as u64
+                    })
+                    .collect();
+                t.sort_unstable();
+                let q = |f: f64| t[((t.len() - 1) as f64 * f) as usize] as f64 / 1e3;
+                println!("| {} | {dim} | {n} | {:.2} | {:.2} | {:.2} | {:?} |", method.name(), q(0.5), q(0.996), q(1.0), s.simd_level());
             }
-            let mut t: Vec<u64> = (0..calls)
-                .map(|_| {
-                    let t0 = Instant::now();
-                    black_box(s.filter(black_box(&scan), &st, black_box(&u_nom)).unwrap());
-                    t0.elapsed().as_nanos() as u64
-                })
-                .collect();
-            t.sort_unstable();
-            let q = |f: f64| t[((t.len() - 1) as f64 * f) as usize] as f64 / 1e3;
-            println!("| {} | {dim} | {n} | {:.2} | {:.2} | {:.2} | {:?} |", method.name(), q(0.5), q(0.996), q(1.0), s.simd_level());
         }
-    }
     }
 }

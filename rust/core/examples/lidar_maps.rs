@@ -60,7 +60,18 @@ struct Args {
 }
 
 fn parse() -> Result<Args, String> {
-    let mut args = Args { range: 20.0, rounds: 400, maps: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps"), only: None, cycle16: false, simplify: RosMapOptions::default().simplify, places: 0, place_rounds: 40, csv: None, mesh: false };
+    let mut args = Args {
+        range: 20.0,
+        rounds: 400,
+        maps: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/maps"),
+        only: None,
+        cycle16: false,
+        simplify: RosMapOptions::default().simplify,
+        places: 0,
+        place_rounds: 40,
+        csv: None,
+        mesh: false,
+    };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         let mut value = || it.next().ok_or_else(|| format!("{flag} needs a value"));

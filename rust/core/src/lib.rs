@@ -12,10 +12,10 @@ pub mod env;
 pub mod error;
 pub mod math;
 pub mod planner;
+pub mod robot;
+pub mod sensors;
 pub mod shield;
 pub mod simd;
 pub mod world;
-pub mod sensors;
-pub mod robot;
 
 pub use error::{Error, Result};

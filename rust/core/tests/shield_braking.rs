@@ -11,12 +11,7 @@ use shieldnav_core::world::{Pose2, Scenario, Segment, StaticMap};
 fn corridor(width: f64, end: f64, start: Pose2) -> Site {
     let mut map = StaticMap::new();
     let h = 0.5 * width;
-    for s in [
-        Segment::new([-10.0, -h], [end, -h], 2.0),
-        Segment::new([-10.0, h], [end, h], 2.0),
-        Segment::new([end, -h], [end, h], 2.0),
-        Segment::new([-10.0, -h], [-10.0, h], 2.0),
-    ] {
+    for s in [Segment::new([-10.0, -h], [end, -h], 2.0), Segment::new([-10.0, h], [end, h], 2.0), Segment::new([end, -h], [end, h], 2.0), Segment::new([-10.0, -h], [-10.0, h], 2.0)] {
         map.add_segment(s).unwrap();
     }
     Site::Scenario(Box::new(Scenario::new("corridor", map, start)))

@@ -171,10 +171,7 @@ fn finite_outputs_at_extremes() {
     ];
     for (kappa, pts) in cases {
         let p = CompositeParams { kappa, ..params(&[0.9, 0.45], [0.0, 0.0, 1.0], None) };
-        for b in [
-            evaluate_composite(&pts, 2, &p, SimdLevel::detect()).unwrap(),
-            evaluate_composite(&pts.iter().map(|&v| v as f32).collect::<Vec<_>>(), 2, &p, SimdLevel::detect()).unwrap(),
-        ] {
+        for b in [evaluate_composite(&pts, 2, &p, SimdLevel::detect()).unwrap(), evaluate_composite(&pts.iter().map(|&v| v as f32).collect::<Vec<_>>(), 2, &p, SimdLevel::detect()).unwrap()] {
             assert!(b.value.is_finite() && b.h_min.is_finite() && b.dh_dt.is_finite(), "{b:?}");
             assert!(b.grad_body.iter().all(|v| v.is_finite()), "{b:?}");
         }

@@ -5,10 +5,7 @@ mod common;
 
 use common::{random_scan, rng, rot_rpy};
 use rand::Rng;
-use shieldnav_core::shield::{
-    move_points, project_halfspace_box, solve_rows, BodyState, LinearConstraints, Motion, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod,
-    SimdLevel,
-};
+use shieldnav_core::shield::{move_points, project_halfspace_box, solve_rows, BodyState, LinearConstraints, Motion, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod, SimdLevel};
 
 fn shield(method: ShieldMethod) -> Shield {
     Shield::new(ShieldConfig { method, ..ShieldConfig::default() }).unwrap()
@@ -165,10 +162,7 @@ fn crop_band_and_downsampling_count_points() {
     let pts = random_scan(&mut g, 50_000, 3, 5.0);
     let scan = Scan::new_f64(&pts, 3).unwrap();
     let state = BodyState::planar(0.0, 0.0).unwrap();
-    let expect = pts
-        .chunks(3)
-        .filter(|c| c[0].hypot(c[1]) <= 3.5 && c[2] >= -0.4 && c[2] <= 1.5)
-        .count();
+    let expect = pts.chunks(3).filter(|c| c[0].hypot(c[1]) <= 3.5 && c[2] >= -0.4 && c[2] <= 1.5).count();
     let o = shield(ShieldMethod::Composite).filter(&scan, &state, &[0.0, 0.0]).unwrap();
     assert_eq!(o.num_points, expect);
     let mut coarse = Shield::new(ShieldConfig { scan: ScanFilter { angular_bins: Some(360), ..ScanFilter::default() }, ..ShieldConfig::default() }).unwrap();

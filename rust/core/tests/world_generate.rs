@@ -43,10 +43,18 @@ fn check_traversable(site: &shieldnav_core::world::generate::GeneratedSite) {
             continue;
         }
         g.set(i, j, Cell::Occupied);
-        if i > 0 { stack.push((i - 1, j)); }
-        if j > 0 { stack.push((i, j - 1)); }
-        if i + 1 < w { stack.push((i + 1, j)); }
-        if j + 1 < h { stack.push((i, j + 1)); }
+        if i > 0 {
+            stack.push((i - 1, j));
+        }
+        if j > 0 {
+            stack.push((i, j - 1));
+        }
+        if i + 1 < w {
+            stack.push((i + 1, j));
+        }
+        if j + 1 < h {
+            stack.push((i, j + 1));
+        }
     }
     for p in &map.polygons {
         for j in 0..h {

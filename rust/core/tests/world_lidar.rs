@@ -19,11 +19,8 @@ fn reference_with_tops(walls: &[Segment], solids: &[Polygon], cfg: &LidarConfig,
     let (sy, cy) = body.yaw.sin_cos();
     let o = [body.x + cy * m.x - sy * m.y, body.y + sy * m.x + cy * m.y];
     let yaw = body.yaw + m.yaw;
-    let elev: Vec<f64> = if cfg.channels == 1 {
-        vec![0.0]
-    } else {
-        (0..cfg.channels).map(|k| cfg.vertical_fov.0 + k as f64 * (cfg.vertical_fov.1 - cfg.vertical_fov.0) / (cfg.channels - 1) as f64).collect()
-    };
+    let elev: Vec<f64> =
+        if cfg.channels == 1 { vec![0.0] } else { (0..cfg.channels).map(|k| cfg.vertical_fov.0 + k as f64 * (cfg.vertical_fov.1 - cfg.vertical_fov.0) / (cfg.channels - 1) as f64).collect() };
     let mut out = vec![f64::INFINITY; cfg.channels * cfg.columns];
     for (k, el) in elev.iter().enumerate() {
         for i in 0..cfg.columns {
@@ -332,7 +329,11 @@ fn walls_that_cross_are_split_where_they_cross() {
                     // (in odd rounds some walls are lower than the sensor, whose walk then
                     // tests an edge's walls one by one; in even rounds every wall is higher)
                     let low = if round % 2 == 1 { 0.3 } else { 1.0 };
-                    if rng.random_bool(0.5) { Segment::new(a, b, rng.random_range(low..3.0)) } else { Segment::one_sided(a, b, 2.0) }
+                    if rng.random_bool(0.5) {
+                        Segment::new(a, b, rng.random_range(low..3.0))
+                    } else {
+                        Segment::one_sided(a, b, 2.0)
+                    }
                 })
                 .collect()
         };
@@ -413,7 +414,6 @@ fn one_sided_grid_walls_give_the_two_sided_reference_ranges_in_free_space() {
         assert!(hits > 500 * poses.len());
     }
 }
-
 
 /// A 3D scan looks down on solid furniture: a 0.8 m box at x 3–6, y ±1 before a wall at
 /// x = 10, scanned from z = 1.0 by 16 channels over ±0.2 rad. The channel passing over the

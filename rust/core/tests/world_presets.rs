@@ -43,13 +43,7 @@ fn odometry_jump_corridor_is_long_with_side_doorways_and_a_100m_jump() {
     assert!(size >= 100.0 && time > 0.0);
     // doorways: gaps in the corridor wall lines y = ±1.2, each 0.8–1.4 m wide
     for y in [1.2, -1.2] {
-        let mut spans: Vec<(f64, f64)> = s
-            .map
-            .segments
-            .iter()
-            .filter(|w| (w.a[1] - y).abs() < 1e-9 && (w.b[1] - y).abs() < 1e-9)
-            .map(|w| (w.a[0].min(w.b[0]), w.a[0].max(w.b[0])))
-            .collect();
+        let mut spans: Vec<(f64, f64)> = s.map.segments.iter().filter(|w| (w.a[1] - y).abs() < 1e-9 && (w.b[1] - y).abs() < 1e-9).map(|w| (w.a[0].min(w.b[0]), w.a[0].max(w.b[0]))).collect();
         spans.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap());
         let gaps: Vec<f64> = spans.windows(2).map(|w| w[1].0 - w[0].1).filter(|g| *g > 1e-9).collect();
         assert!(gaps.len() >= 4, "side y={y}: {} doorways", gaps.len());

@@ -63,10 +63,18 @@ fn flood(g: &shieldnav_core::world::OccupancyGrid, start: (usize, usize), solid:
             continue;
         }
         inside[j * w + i] = true;
-        if i > 0 { stack.push((i - 1, j)) }
-        if j > 0 { stack.push((i, j - 1)) }
-        if i + 1 < w { stack.push((i + 1, j)) }
-        if j + 1 < h { stack.push((i, j + 1)) }
+        if i > 0 {
+            stack.push((i - 1, j))
+        }
+        if j > 0 {
+            stack.push((i, j - 1))
+        }
+        if i + 1 < w {
+            stack.push((i + 1, j))
+        }
+        if j + 1 < h {
+            stack.push((i, j + 1))
+        }
     }
     inside
 }
@@ -83,7 +91,17 @@ fn check_walls_and_start(unknown_is_wall: bool, unreachable: bool) {
         let on_grid = |i: i64, j: i64| i >= 0 && j >= 0 && (i as usize) < g.width && (j as usize) < g.height;
         // the solid side of an edge: solid cells, or (walls of the region only) cells off the
         // region; beyond the image lies unknown space, solid with unknown_is_wall
-        let occ = |i: i64, j: i64| if on_grid(i, j) { if unreachable { solid(g.get(i as usize, j as usize)) } else { !region[j as usize * g.width + i as usize] } } else { unknown_is_wall };
+        let occ = |i: i64, j: i64| {
+            if on_grid(i, j) {
+                if unreachable {
+                    solid(g.get(i as usize, j as usize))
+                } else {
+                    !region[j as usize * g.width + i as usize]
+                }
+            } else {
+                unknown_is_wall
+            }
+        };
         // an edge between a solid and an open side (with the region and open unknown space: both
         // on the grid, the region running on beyond the image)
         let edge = |p: (i64, i64), q: (i64, i64)| occ(p.0, p.1) != occ(q.0, q.1) && (unreachable || unknown_is_wall || (on_grid(p.0, p.1) && on_grid(q.0, q.1)));
@@ -294,10 +312,7 @@ fn rgba_png_uses_luminance_alpha_and_negate() {
     enc.set_color(png::ColorType::Rgba);
     enc.set_depth(png::BitDepth::Eight);
     enc.write_header().unwrap().write_image_data(&px).unwrap();
-    for (negate, want) in [
-        (0, [Cell::Occupied, Cell::Free, Cell::Unknown, Cell::Occupied]),
-        (1, [Cell::Free, Cell::Occupied, Cell::Unknown, Cell::Unknown]),
-    ] {
+    for (negate, want) in [(0, [Cell::Occupied, Cell::Free, Cell::Unknown, Cell::Occupied]), (1, [Cell::Free, Cell::Occupied, Cell::Unknown, Cell::Unknown])] {
         std::fs::write(d.join("m.yaml"), format!("image: m.png\nresolution: 0.5\norigin: [1.0, 2.0, 0.0]\nnegate: {negate}\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")).unwrap();
         // no interior start in a 4 x 1 image: the error says so, naming the file
         let err = load_ros_map(d.join("m.yaml"), &RosMapOptions::default()).unwrap_err().to_string();

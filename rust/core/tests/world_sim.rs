@@ -244,7 +244,12 @@ fn impossible_starts_are_errors() {
         World::new(s, WorldConfig::default())
     };
     world(Pose2::new(0.0, 0.0, 0.0)).unwrap();
-    for (start, what) in [(Pose2::new(0.0, 0.9, 0.0), "crosses or touches the wall"), (Pose2::new(0.0, 0.5, 1.5), "crosses or touches the wall"), (Pose2::new(4.0, -1.0, 0.0), "inside polygons[0]"), (Pose2::new(-4.0, -3.0, 0.3), "inside the obstacle `chair`")] {
+    for (start, what) in [
+        (Pose2::new(0.0, 0.9, 0.0), "crosses or touches the wall"),
+        (Pose2::new(0.0, 0.5, 1.5), "crosses or touches the wall"),
+        (Pose2::new(4.0, -1.0, 0.0), "inside polygons[0]"),
+        (Pose2::new(-4.0, -3.0, 0.3), "inside the obstacle `chair`"),
+    ] {
         let e = world(start).unwrap_err().to_string();
         assert!(e.contains("`start`") && e.contains(what), "{start:?}: {e}");
     }

@@ -24,7 +24,8 @@ pub struct PyBatch {
 }
 
 fn seeds_vec(obj: &Bound<'_, PyAny>, n: usize, name: &str) -> PyResult<Vec<u64>> {
-    let v: Vec<u64> = if let Ok(a) = obj.extract::<PyReadonlyArray1<u64>>() { a.as_array().to_vec() } else { obj.extract().map_err(|_| invalid(name, "expected a sequence of non-negative integers"))? };
+    let v: Vec<u64> =
+        if let Ok(a) = obj.extract::<PyReadonlyArray1<u64>>() { a.as_array().to_vec() } else { obj.extract().map_err(|_| invalid(name, "expected a sequence of non-negative integers"))? };
     if v.len() != n {
         return Err(invalid(name, format!("expected {n} seeds, got {}", v.len())));
     }
@@ -36,7 +37,18 @@ impl PyBatch {
     #[new]
     #[pyo3(signature = (num_envs, seeds, *, preset=None, procedural=false, ros_map=None, scenario=None, autoreset_mode="next_step", threads=2, **kwargs))]
     #[allow(clippy::too_many_arguments)]
-    fn new(py: Python<'_>, #[pyo3(from_py_with = crate::errors::num_envs_arg)] num_envs: usize, seeds: &Bound<'_, PyAny>, preset: Option<String>, procedural: bool, ros_map: Option<PathBuf>, scenario: Option<PathBuf>, autoreset_mode: &str, #[pyo3(from_py_with = crate::errors::threads_arg)] threads: usize, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        #[pyo3(from_py_with = crate::errors::num_envs_arg)] num_envs: usize,
+        seeds: &Bound<'_, PyAny>,
+        preset: Option<String>,
+        procedural: bool,
+        ros_map: Option<PathBuf>,
+        scenario: Option<PathBuf>,
+        autoreset_mode: &str,
+        #[pyo3(from_py_with = crate::errors::threads_arg)] threads: usize,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
         let args = SiteArgs { preset, procedural, ros_map, scenario };
         args.check()?;
         args.check_keys(kwargs)?;
@@ -73,7 +85,20 @@ impl PyBatch {
     /// final_obs, reset)`; `info` holds one array per key, `final_obs` the last observation of
     /// episodes that ended (same-step mode), `reset` which episodes were reset in this call.
     #[allow(clippy::type_complexity)]
-    fn step<'py>(&mut self, py: Python<'py>, actions: &Bound<'py, PyAny>, next_seeds: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<bool>>, Bound<'py, PyArray1<bool>>, Bound<'py, PyDict>, Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<bool>>)> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: &Bound<'py, PyAny>,
+        next_seeds: &Bound<'py, PyAny>,
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f32>>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<bool>>,
+        Bound<'py, PyArray1<bool>>,
+        Bound<'py, PyDict>,
+        Bound<'py, PyArray2<f32>>,
+        Bound<'py, PyArray1<bool>>,
+    )> {
         let n = self.inner.len();
         crate::errors::refuse_bool_complex(actions, "actions")?;
         let a: Vec<f64> = if let Ok(arr) = actions.extract::<PyReadonlyArray2<f32>>() {
@@ -133,15 +158,7 @@ impl PyBatch {
             }
         }
         info.set_item("ended", ended)?;
-        Ok((
-            obs,
-            col(&|s| s.report.reward),
-            flag(&|s| s.report.terminated),
-            flag(&|s| s.report.truncated),
-            info,
-            fin,
-            flag(&|s| s.reset),
-        ))
+        Ok((obs, col(&|s| s.report.reward), flag(&|s| s.report.terminated), flag(&|s| s.report.truncated), info, fin, flag(&|s| s.reset)))
     }
 
     /// Totals of episode `i` so far.

@@ -141,15 +141,7 @@ macro_rules! each_field {
 }
 
 /// Keys that are not plain fields.
-const SPECIAL: [&str; 7] = [
-    "shield",
-    "action_mode",
-    "lidar_mount",
-    "site_kind",
-    "unknown_is_wall",
-    "unreachable_walls",
-    "simplify",
-];
+const SPECIAL: [&str; 7] = ["shield", "action_mode", "lidar_mount", "site_kind", "unknown_is_wall", "unreachable_walls", "simplify"];
 
 /// Every key [`episode_config`] accepts.
 pub fn known_keys() -> Vec<&'static str> {
@@ -213,29 +205,19 @@ pub struct SiteOptions {
 
 /// Reads `kwargs` over the defaults; an unknown key or a value of the wrong type is an
 /// `InvalidArgumentError` naming the key.
-pub fn episode_config(
-    kwargs: Option<&Bound<'_, PyDict>>,
-) -> PyResult<(EpisodeConfig, SiteOptions)> {
+pub fn episode_config(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<(EpisodeConfig, SiteOptions)> {
     let mut c = EpisodeConfig::default();
-    let mut site = SiteOptions {
-        generator: GeneratorConfig::default(),
-        ros_map: RosMapOptions::default(),
-    };
+    let mut site = SiteOptions { generator: GeneratorConfig::default(), ros_map: RosMapOptions::default() };
     let Some(kw) = kwargs else {
         return Ok((c, site));
     };
     let known = known_keys();
     for k in kw.keys() {
-        let k: String = k
-            .extract()
-            .map_err(|_| invalid("kwargs", "keyword names must be strings"))?;
+        let k: String = k.extract().map_err(|_| invalid("kwargs", "keyword names must be strings"))?;
         if !known.contains(&k.as_str()) {
             let mut sorted = known.clone();
             sorted.sort();
-            return Err(invalid(
-                &k,
-                format!("unknown keyword argument; known: {}", sorted.join(", ")),
-            ));
+            return Err(invalid(&k, format!("unknown keyword argument; known: {}", sorted.join(", "))));
         }
     }
     macro_rules! read {
@@ -251,54 +233,35 @@ pub fn episode_config(
     }
     each_field!(read);
     if let Some(v) = kw.get_item("shield")? {
-        let name: String = v
-            .extract()
-            .map_err(|_| invalid("shield", "expected a string"))?;
+        let name: String = v.extract().map_err(|_| invalid("shield", "expected a string"))?;
         c.shield.method = ShieldMethod::parse(&name).map_err(|_| invalid("shield", format!("unknown shield {name:?}; expected one of {:?}", ShieldMethod::NAMES)))?;
     }
     if let Some(v) = kw.get_item("action_mode")? {
-        let name: String = v
-            .extract()
-            .map_err(|_| invalid("action_mode", "expected a string"))?;
+        let name: String = v.extract().map_err(|_| invalid("action_mode", "expected a string"))?;
         c.action_mode = ActionMode::parse(&name).map_err(crate::errors::to_py)?;
     }
     if let Some(v) = kw.get_item("lidar_mount")? {
         crate::errors::refuse_bool_complex(&v, "lidar_mount")?;
-        let (x, y, z, yaw): (f64, f64, f64, f64) = v
-            .extract()
-            .map_err(|_| invalid("lidar_mount", "expected (x, y, z, yaw)"))?;
+        let (x, y, z, yaw): (f64, f64, f64, f64) = v.extract().map_err(|_| invalid("lidar_mount", "expected (x, y, z, yaw)"))?;
         c.world.lidar.mount = shieldnav_core::sensors::LidarMount { x, y, z, yaw };
     }
     if let Some(v) = kw.get_item("site_kind")? {
-        let name: String = v
-            .extract()
-            .map_err(|_| invalid("site_kind", "expected a string"))?;
+        let name: String = v.extract().map_err(|_| invalid("site_kind", "expected a string"))?;
         site.generator.kind = match name.as_str() {
             "office" => SiteKind::Office,
             "tunnel" => SiteKind::Tunnel,
-            other => {
-                return Err(invalid(
-                    "site_kind",
-                    format!("expected \"office\" or \"tunnel\", got {other:?}"),
-                ))
-            }
+            other => return Err(invalid("site_kind", format!("expected \"office\" or \"tunnel\", got {other:?}"))),
         };
     }
     if let Some(v) = kw.get_item("unknown_is_wall")? {
-        site.ros_map.unknown_is_wall = v
-            .extract()
-            .map_err(|_| invalid("unknown_is_wall", "expected a bool"))?;
+        site.ros_map.unknown_is_wall = v.extract().map_err(|_| invalid("unknown_is_wall", "expected a bool"))?;
     }
     if let Some(v) = kw.get_item("unreachable_walls")? {
-        site.ros_map.unreachable_walls = v
-            .extract()
-            .map_err(|_| invalid("unreachable_walls", "expected a bool"))?;
+        site.ros_map.unreachable_walls = v.extract().map_err(|_| invalid("unreachable_walls", "expected a bool"))?;
     }
     if let Some(v) = kw.get_item("simplify")? {
         crate::errors::refuse_bool_complex(&v, "simplify")?;
-        let t: f64 = v
-            .extract()
-            .map_err(|_| invalid("simplify", "expected a number of cells"))?;
+        let t: f64 = v.extract().map_err(|_| invalid("simplify", "expected a number of cells"))?;
         if !(t.is_finite() && t >= 0.0) {
             return Err(invalid("simplify", format!("must be finite and >= 0 cells, got {t}")));
         }
@@ -313,10 +276,7 @@ pub fn episode_config(
         c.world.lidar.check_rate(c.world.dt).map_err(|e| keyed(e, Some(kw)))?;
     }
     c.world.robot.validate().map_err(|e| keyed(e, Some(kw)))?;
-    site.generator.footprint = shieldnav_core::world::Footprint {
-        length: c.world.robot.length,
-        width: c.world.robot.width,
-    };
+    site.generator.footprint = shieldnav_core::world::Footprint { length: c.world.robot.length, width: c.world.robot.width };
     Ok((c, site))
 }
 

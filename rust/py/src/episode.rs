@@ -26,8 +26,7 @@ fn pose_tuple(p: Pose2) -> (f64, f64, f64) {
 /// real numbers (bool and complex refused).
 fn action3(obj: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
     crate::errors::refuse_bool_complex(obj, "action")?;
-    let bad_shape =
-        |shape: &[usize]| invalid("action", format!("expected shape (3,), got {shape:?}"));
+    let bad_shape = |shape: &[usize]| invalid("action", format!("expected shape (3,), got {shape:?}"));
     // (through a view, so that a strided array of three is read too)
     if let Ok(a) = obj.extract::<PyReadonlyArray1<f32>>() {
         let v = a.as_array();
@@ -37,12 +36,7 @@ fn action3(obj: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
         let v = a.as_array();
         return if v.len() == 3 { Ok([v[0], v[1], v[2]]) } else { Err(bad_shape(a.shape())) };
     }
-    obj.extract::<[f64; 3]>().map_err(|_| {
-        invalid(
-            "action",
-            "expected 3 numbers (a float32 array of shape (3,))",
-        )
-    })
+    obj.extract::<[f64; 3]>().map_err(|_| invalid("action", "expected 3 numbers (a float32 array of shape (3,))"))
 }
 
 /// Builds the `info` dict of a step (Safety-Gymnasium style keys).
@@ -60,10 +54,7 @@ fn info<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
     d.set_item(intern!(py, "shield_recovering"), r.shield_recovering)?;
     d.set_item(intern!(py, "intervention"), r.intervention)?;
     d.set_item(intern!(py, "u_nom"), PyArray1::from_slice(py, &r.u_nom))?;
-    d.set_item(
-        intern!(py, "u_filtered"),
-        PyArray1::from_slice(py, &r.u_filtered),
-    )?;
+    d.set_item(intern!(py, "u_filtered"), PyArray1::from_slice(py, &r.u_filtered))?;
     d.set_item(intern!(py, "coverage"), r.coverage)?;
     d.set_item(intern!(py, "new_coverage"), r.new_coverage)?;
     d.set_item(intern!(py, "deadlock"), r.deadlock)?;
@@ -176,10 +167,7 @@ impl PyEpisode {
 
     /// The latest scan's returns in the current body frame as a new float32 array of shape
     /// (channels * columns, 3), zero where there is no return, and the validity mask (int8).
-    fn scan_points<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<ScanPoints<'py>> {
+    fn scan_points<'py>(&self, py: Python<'py>) -> PyResult<ScanPoints<'py>> {
         let scan = self.inner.world().scan();
         let n = scan.channels * scan.columns;
         let pts = PyArray2::<f32>::zeros(py, [n, 3], false);
@@ -225,9 +213,7 @@ impl PyEpisode {
     fn render_data<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let w = self.inner.world();
         let d = PyDict::new(py);
-        let seg = |v: &mut Vec<f64>, a: [f64; 2], b: [f64; 2]| {
-            v.extend_from_slice(&[a[0], a[1], b[0], b[1]])
-        };
+        let seg = |v: &mut Vec<f64>, a: [f64; 2], b: [f64; 2]| v.extend_from_slice(&[a[0], a[1], b[0], b[1]]);
         let mut walls = Vec::new();
         for s in &w.scenario().map.segments {
             seg(&mut walls, s.a, s.b);
@@ -249,28 +235,13 @@ impl PyEpisode {
         d.set_item("walls", shape4(walls)?)?;
         d.set_item("obstacles", shape4(obstacles)?)?;
         d.set_item("pieces", shape4(pieces)?)?;
-        d.set_item(
-            "inspected",
-            PyArray1::from_vec(py, cov.inspected().to_vec()),
-        )?;
+        d.set_item("inspected", PyArray1::from_vec(py, cov.inspected().to_vec()))?;
         let pose = w.true_pose();
-        d.set_item(
-            "pose",
-            PyArray1::from_slice(py, &[pose.x, pose.y, pose.yaw]),
-        )?;
+        d.set_item("pose", PyArray1::from_slice(py, &[pose.x, pose.y, pose.yaw]))?;
         let est = w.estimated_pose();
-        d.set_item(
-            "estimated_pose",
-            PyArray1::from_slice(py, &[est.x, est.y, est.yaw]),
-        )?;
+        d.set_item("estimated_pose", PyArray1::from_slice(py, &[est.x, est.y, est.yaw]))?;
         let (s, c) = pose.yaw.sin_cos();
-        let pts: Vec<f64> = self
-            .inner
-            .points()
-            .0
-            .chunks_exact(3)
-            .flat_map(|p| [pose.x + c * p[0] - s * p[1], pose.y + s * p[0] + c * p[1]])
-            .collect();
+        let pts: Vec<f64> = self.inner.points().0.chunks_exact(3).flat_map(|p| [pose.x + c * p[0] - s * p[1], pose.y + s * p[0] + c * p[1]]).collect();
         let n = pts.len() / 2;
         d.set_item("points", PyArray1::from_vec(py, pts).reshape([n, 2])?)?;
         let r = self.inner.last_report();
@@ -339,11 +310,7 @@ impl PyEpisode {
     #[getter]
     fn geometry(&self) -> ((f64, f64), Vec<f64>, Option<f64>) {
         let c = self.inner.config();
-        (
-            (c.world.robot.length, c.world.robot.width),
-            c.shield.semi_axes.clone(),
-            c.shield.scan.crop_radius,
-        )
+        ((c.world.robot.length, c.world.robot.width), c.shield.semi_axes.clone(), c.shield.scan.crop_radius)
     }
 
     /// Control period (s).
@@ -353,12 +320,7 @@ impl PyEpisode {
     }
 
     fn __repr__(&self) -> String {
-        format!(
-            "Episode(name={:?}, time={:.2}, coverage={:.3})",
-            self.inner.world().scenario().name,
-            self.inner.world().time(),
-            self.inner.coverage().fraction()
-        )
+        format!("Episode(name={:?}, time={:.2}, coverage={:.3})", self.inner.world().scenario().name, self.inner.world().time(), self.inner.coverage().fraction())
     }
 }
 

@@ -11,9 +11,7 @@ pyo3::import_exception!(shieldnav.exceptions, MapFileError);
 /// Maps a core error to its Python exception.
 pub fn to_py(err: Error) -> PyErr {
     match err {
-        Error::InvalidArgument { .. } | Error::DimensionMismatch { .. } | Error::UnknownPreset { .. } => {
-            InvalidArgumentError::new_err(err.to_string())
-        }
+        Error::InvalidArgument { .. } | Error::DimensionMismatch { .. } | Error::UnknownPreset { .. } => InvalidArgumentError::new_err(err.to_string()),
         Error::MapFile { .. } => MapFileError::new_err(err.to_string()),
         Error::Solver(_) => SolverError::new_err(err.to_string()),
     }

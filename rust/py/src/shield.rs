@@ -246,10 +246,7 @@ impl PyShield {
 
     fn __repr__(&self) -> String {
         let c = self.inner.config();
-        format!(
-            "Shield(semi_axes={:?}, gamma={}, kappa={}, alpha={}, crop_radius={:?}, u_max={:?}, method={:?})",
-            c.semi_axes, c.gamma, c.kappa, c.alpha, c.scan.crop_radius, c.u_max, c.method.name()
-        )
+        format!("Shield(semi_axes={:?}, gamma={}, kappa={}, alpha={}, crop_radius={:?}, u_max={:?}, method={:?})", c.semi_axes, c.gamma, c.kappa, c.alpha, c.scan.crop_radius, c.u_max, c.method.name())
     }
 }
 
@@ -319,9 +316,7 @@ fn body_state(dim: usize, yaw: Option<f64>, omega: Option<&Bound<'_, PyAny>>, ro
     }
     let r: Mat3 = match (rotation, yaw) {
         (Some(_), Some(_)) => return Err(invalid("rotation", "give either `rotation` or `yaw`, not both")),
-        (Some(r), None) => {
-            rotation_arg(r)?
-        }
+        (Some(r), None) => rotation_arg(r)?,
         (None, y) => rot_z(y.unwrap_or(0.0)),
     };
     let w = match omega {

@@ -157,17 +157,7 @@ impl PyWorld {
             "tunnel" => SiteKind::Tunnel,
             other => return Err(InvalidArgumentError::new_err(format!("invalid `kind`: expected \"office\" or \"tunnel\", got {other:?}"))),
         };
-        let lidar = LidarConfig {
-            channels,
-            columns,
-            vertical_fov,
-            min_range,
-            max_range,
-            range_noise_std,
-            dropout,
-            rate_hz,
-            mount: LidarMount { x: mount.0, y: mount.1, z: mount.2, yaw: mount.3 },
-        };
+        let lidar = LidarConfig { channels, columns, vertical_fov, min_range, max_range, range_noise_std, dropout, rate_hz, mount: LidarMount { x: mount.0, y: mount.1, z: mount.2, yaw: mount.3 } };
         let config = WorldConfig { robot: RobotShape { length: robot_length, width: robot_width, corner_radius }, tracker: TrackerConfig::default(), lidar, dt, seed };
         let world = py
             .detach(move || {

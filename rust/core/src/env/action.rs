@@ -26,10 +26,7 @@ impl ActionMode {
             "body" => Ok(Self::Body),
             "world" => Ok(Self::World),
             "waypoint" => Ok(Self::Waypoint),
-            other => Err(Error::invalid(
-                "action_mode",
-                format!("unknown mode {other:?}; expected \"body\", \"world\" or \"waypoint\""),
-            )),
+            other => Err(Error::invalid("action_mode", format!("unknown mode {other:?}; expected \"body\", \"world\" or \"waypoint\""))),
         }
     }
 
@@ -51,10 +48,7 @@ pub const ACTION_TOLERANCE: Real = 1e-6;
 pub fn check_action(action: &[Real; 3]) -> Result<[Real; 3]> {
     for &v in action {
         if !(v.is_finite() && v.abs() <= 1.0 + ACTION_TOLERANCE) {
-            return Err(Error::invalid(
-                "action",
-                format!("every entry must be finite and in [-1, 1], got {action:?}"),
-            ));
+            return Err(Error::invalid("action", format!("every entry must be finite and in [-1, 1], got {action:?}")));
         }
     }
     Ok(action.map(|v| v.clamp(-1.0, 1.0)))
@@ -62,23 +56,12 @@ pub fn check_action(action: &[Real; 3]) -> Result<[Real; 3]> {
 
 /// The body-frame nominal command `(v_x, v_y, ω)` of `action` for a robot whose estimated pose
 /// is `estimate`.
-pub fn nominal_command(
-    mode: ActionMode,
-    action: &[Real; 3],
-    estimate: Pose2,
-    tracker: &TrackerConfig,
-    controller: &NominalController,
-    reach: Real,
-) -> Result<[Real; 3]> {
+pub fn nominal_command(mode: ActionMode, action: &[Real; 3], estimate: Pose2, tracker: &TrackerConfig, controller: &NominalController, reach: Real) -> Result<[Real; 3]> {
     let a = check_action(action)?;
     let (s, c) = estimate.yaw.sin_cos();
     let to_body = |w: [Real; 2]| [c * w[0] + s * w[1], -s * w[0] + c * w[1]];
     Ok(match mode {
-        ActionMode::Body => [
-            a[0] * tracker.v_max[0],
-            a[1] * tracker.v_max[1],
-            a[2] * tracker.w_max,
-        ],
+        ActionMode::Body => [a[0] * tracker.v_max[0], a[1] * tracker.v_max[1], a[2] * tracker.w_max],
         ActionMode::World => {
             let m = controller.config().u_max;
             let v = to_body([a[0] * m[0], a[1] * m[1]]);
@@ -110,21 +93,14 @@ mod tests {
         let w = nominal_command(ActionMode::World, &[1.0, 0.0, 0.0], est, &tr, &ctl, 2.0).unwrap();
         assert!(w[0].abs() < 1e-12 && (w[1] + 1.0).abs() < 1e-12);
         // a waypoint 0.1 m straight ahead: K_p · 0.1 = 0.4 m/s forward
-        let p =
-            nominal_command(ActionMode::Waypoint, &[0.05, 0.0, 0.0], est, &tr, &ctl, 2.0).unwrap();
-        assert!(
-            (p[0] - 0.4).abs() < 1e-12 && p[1].abs() < 1e-12 && p[2] == 0.0,
-            "{p:?}"
-        );
+        let p = nominal_command(ActionMode::Waypoint, &[0.05, 0.0, 0.0], est, &tr, &ctl, 2.0).unwrap();
+        assert!((p[0] - 0.4).abs() < 1e-12 && p[1].abs() < 1e-12 && p[2] == 0.0, "{p:?}");
     }
 
     #[test]
     fn out_of_range_or_nan_actions_are_errors() {
         assert!(check_action(&[1.5, 0.0, 0.0]).is_err());
         assert!(check_action(&[0.0, Real::NAN, 0.0]).is_err());
-        assert_eq!(
-            check_action(&[1.0 + 1e-7, 0.0, -1.0]).unwrap(),
-            [1.0, 0.0, -1.0]
-        );
+        assert_eq!(check_action(&[1.0 + 1e-7, 0.0, -1.0]).unwrap(), [1.0, 0.0, -1.0]);
     }
 }

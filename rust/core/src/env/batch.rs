@@ -133,10 +133,7 @@ impl Batch {
             }
             let a = [actions[3 * i], actions[3 * i + 1], actions[3 * i + 2]];
             if check_action(&a).is_err() {
-                return Err(Error::invalid(
-                    "actions",
-                    format!("actions[{i}]: every entry must be finite and in [-1, 1], got {a:?}; no episode was stepped"),
-                ));
+                return Err(Error::invalid("actions", format!("actions[{i}]: every entry must be finite and in [-1, 1], got {a:?}; no episode was stepped")));
             }
         }
         let (l, mode) = (self.obs_len, self.mode);

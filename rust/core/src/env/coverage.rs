@@ -43,11 +43,7 @@ pub struct CoverageConfig {
 
 impl Default for CoverageConfig {
     fn default() -> Self {
-        Self {
-            piece_length: 0.25,
-            margin: 0.5,
-            goal: 0.95,
-        }
+        Self { piece_length: 0.25, margin: 0.5, goal: 0.95 }
     }
 }
 
@@ -55,22 +51,13 @@ impl CoverageConfig {
     /// Checks every field; the error names it.
     pub fn validate(&self) -> Result<()> {
         if !(self.piece_length.is_finite() && self.piece_length >= 0.05) {
-            return Err(Error::invalid(
-                "piece_length",
-                format!("must be finite and >= 0.05 m, got {}", self.piece_length),
-            ));
+            return Err(Error::invalid("piece_length", format!("must be finite and >= 0.05 m, got {}", self.piece_length)));
         }
         if !(self.margin.is_finite() && self.margin >= 0.0) {
-            return Err(Error::invalid(
-                "coverage_margin",
-                format!("must be finite and >= 0, got {}", self.margin),
-            ));
+            return Err(Error::invalid("coverage_margin", format!("must be finite and >= 0, got {}", self.margin)));
         }
         if !(self.goal > 0.0 && self.goal <= 1.0) {
-            return Err(Error::invalid(
-                "coverage_goal",
-                format!("must be in (0, 1], got {}", self.goal),
-            ));
+            return Err(Error::invalid("coverage_goal", format!("must be in (0, 1], got {}", self.goal)));
         }
         Ok(())
     }
@@ -112,19 +99,9 @@ fn cut(walls: &[Segment], piece_length: Real) -> Vec<Piece> {
         let n = (len / piece_length).ceil().max(1.0) as usize;
         for k in 0..n {
             let (t0, t1) = (k as Real / n as Real, (k + 1) as Real / n as Real);
-            let at = |t: Real| {
-                [
-                    w.a[0] + t * (w.b[0] - w.a[0]),
-                    w.a[1] + t * (w.b[1] - w.a[1]),
-                ]
-            };
+            let at = |t: Real| [w.a[0] + t * (w.b[0] - w.a[0]), w.a[1] + t * (w.b[1] - w.a[1])];
             let (a, b) = (at(t0), at(t1));
-            out.push(Piece {
-                a,
-                b,
-                mid: at(0.5 * (t0 + t1)),
-                length: len / n as Real,
-            });
+            out.push(Piece { a, b, mid: at(0.5 * (t0 + t1)), length: len / n as Real });
         }
     }
     out
@@ -144,10 +121,7 @@ fn reachable(walls: &[Segment], start: Point2) -> Result<(OccupancyGrid, FreeReg
     let w = ((hi[0] - lo[0] + 2.0 * pad) / COVERAGE_GRID).ceil() as usize + 1;
     let h = ((hi[1] - lo[1] + 2.0 * pad) / COVERAGE_GRID).ceil() as usize + 1;
     if w.saturating_mul(h) > 200_000_000 {
-        return Err(Error::invalid(
-            "walls",
-            format!("the site spans {w} x {h} coverage cells of {COVERAGE_GRID} m; too large"),
-        ));
+        return Err(Error::invalid("walls", format!("the site spans {w} x {h} coverage cells of {COVERAGE_GRID} m; too large")));
     }
     let mut grid = OccupancyGrid::new(w, h, COVERAGE_GRID, origin, Cell::Free)?;
     grid.rasterize_segments(walls);
@@ -155,10 +129,7 @@ fn reachable(walls: &[Segment], start: Point2) -> Result<(OccupancyGrid, FreeReg
         return Err(Error::invalid("start", "outside the site"));
     };
     if grid.get(i0, j0) != Cell::Free {
-        return Err(Error::invalid(
-            "start",
-            format!("lies on a wall at ({:.3}, {:.3})", start[0], start[1]),
-        ));
+        return Err(Error::invalid("start", format!("lies on a wall at ({:.3}, {:.3})", start[0], start[1])));
     }
     let region = FreeRegion::new(&grid, (i0, j0));
     Ok((grid, region))
@@ -175,12 +146,7 @@ impl Coverage {
             .filter(|p| {
                 let d = [p.b[0] - p.a[0], p.b[1] - p.a[1]];
                 let n = [-d[1] / p.length.max(1e-12), d[0] / p.length.max(1e-12)];
-                let probe = |s: Real| {
-                    [
-                        p.mid[0] + s * PROBE_OFFSET * n[0],
-                        p.mid[1] + s * PROBE_OFFSET * n[1],
-                    ]
-                };
+                let probe = |s: Real| [p.mid[0] + s * PROBE_OFFSET * n[0], p.mid[1] + s * PROBE_OFFSET * n[1]];
                 open(probe(1.0)) || open(probe(-1.0))
             })
             .collect();
@@ -191,9 +157,7 @@ impl Coverage {
         }
         let nx = ((hi[0] - lo[0]) / BUCKET) as usize + 1;
         let ny = ((hi[1] - lo[1]) / BUCKET) as usize + 1;
-        let bucket = |m: Point2| {
-            (((m[1] - lo[1]) / BUCKET) as usize) * nx + ((m[0] - lo[0]) / BUCKET) as usize
-        };
+        let bucket = |m: Point2| (((m[1] - lo[1]) / BUCKET) as usize) * nx + ((m[0] - lo[0]) / BUCKET) as usize;
         let mut starts = vec![0u32; nx * ny + 1];
         for p in &pieces {
             starts[bucket(p.mid) + 1] += 1;
@@ -209,18 +173,7 @@ impl Coverage {
             fill[b] += 1;
         }
         let total = pieces.iter().map(|p| p.length).sum();
-        Ok(Self {
-            inspected: vec![false; pieces.len()],
-            pieces,
-            total,
-            covered: 0.0,
-            count: 0,
-            origin: lo,
-            nx,
-            ny,
-            starts,
-            ids,
-        })
+        Ok(Self { inspected: vec![false; pieces.len()], pieces, total, covered: 0.0, count: 0, origin: lo, nx, ny, starts, ids })
     }
 
     /// Marks the pieces the camera sees at `scan` (its sensor pose, its ranges) within
@@ -233,24 +186,13 @@ impl Coverage {
             return 0.0;
         }
         // the channel nearest the horizon is the camera's line of sight
-        let (k, cos_el) = cos_el
-            .iter()
-            .copied()
-            .enumerate()
-            .fold((0, -1.0), |a, b| if b.1 > a.1 { b } else { a });
+        let (k, cos_el) = cos_el.iter().copied().enumerate().fold((0, -1.0), |a, b| if b.1 > a.1 { b } else { a });
         let ranges = &scan.ranges[k * cols..(k + 1) * cols];
         let step = std::f64::consts::TAU / cols as Real;
         let half = 0.5 * fov_h;
-        let f =
-            |v: Real, o: Real, n: usize| (((v - o) / BUCKET).floor().max(0.0) as usize).min(n - 1);
-        let (i0, i1) = (
-            f(sp.x - range, self.origin[0], self.nx),
-            f(sp.x + range, self.origin[0], self.nx),
-        );
-        let (j0, j1) = (
-            f(sp.y - range, self.origin[1], self.ny),
-            f(sp.y + range, self.origin[1], self.ny),
-        );
+        let f = |v: Real, o: Real, n: usize| (((v - o) / BUCKET).floor().max(0.0) as usize).min(n - 1);
+        let (i0, i1) = (f(sp.x - range, self.origin[0], self.nx), f(sp.x + range, self.origin[0], self.nx));
+        let (j0, j1) = (f(sp.y - range, self.origin[1], self.ny), f(sp.y + range, self.origin[1], self.ny));
         let (ys, yc) = sp.yaw.sin_cos();
         let far2 = range * range * (1.0 + 1e-9);
         let front_only = half < std::f64::consts::FRAC_PI_2;
@@ -281,8 +223,7 @@ impl Coverage {
                     if bearing.abs() > half {
                         continue;
                     }
-                    let col =
-                        ((bearing / step).round() as isize).rem_euclid(cols as isize) as usize;
+                    let col = ((bearing / step).round() as isize).rem_euclid(cols as isize) as usize;
                     if ranges[col] * cos_el >= d - LINE_OF_SIGHT_TOLERANCE {
                         self.inspected[id] = true;
                         self.covered += self.pieces[id].length;
@@ -344,9 +285,7 @@ mod tests {
 
     fn room() -> Vec<Segment> {
         let c = [[0.0, 0.0], [6.0, 0.0], [6.0, 4.0], [0.0, 4.0]];
-        (0..4)
-            .map(|k| Segment::new(c[k], c[(k + 1) % 4], 2.0))
-            .collect()
+        (0..4).map(|k| Segment::new(c[k], c[(k + 1) % 4], 2.0)).collect()
     }
 
     #[test]
@@ -356,15 +295,8 @@ mod tests {
         walls.extend(Polygon::rect(5.0, 1.0, 6.0, 2.0, 1.0).edges());
         let cov = Coverage::new(&walls, [1.0, 1.0], &CoverageConfig::default()).unwrap();
         // room perimeter 20 m, less the 1 m of right wall behind the box, plus 3 m of box faces
-        assert!(
-            (cov.total_length() - 22.0).abs() < 1e-9,
-            "{}",
-            cov.total_length()
-        );
-        assert!(cov
-            .pieces()
-            .iter()
-            .all(|p| !(p.mid[0] == 6.0 && p.mid[1] > 1.0 && p.mid[1] < 2.0)));
+        assert!((cov.total_length() - 22.0).abs() < 1e-9, "{}", cov.total_length());
+        assert!(cov.pieces().iter().all(|p| !(p.mid[0] == 6.0 && p.mid[1] > 1.0 && p.mid[1] < 2.0)));
     }
 
     #[test]
@@ -396,20 +328,9 @@ mod tests {
                 tx.min(ty)
             })
             .collect();
-        let scan = Scan {
-            channels: 1,
-            columns: cols,
-            ranges,
-            points: Vec::new(),
-            stamp: 0.0,
-            sensor_pose: sp,
-        };
+        let scan = Scan { channels: 1, columns: cols, ranges, points: Vec::new(), stamp: 0.0, sensor_pose: sp };
         let fov = 69.4_f64.to_radians();
-        assert_eq!(
-            cov.update(&scan, &[1.0], fov, 2.0),
-            0.0,
-            "the wall is 3 m away, beyond range 2 m"
-        );
+        assert_eq!(cov.update(&scan, &[1.0], fov, 2.0), 0.0, "the wall is 3 m away, beyond range 2 m");
         let new = cov.update(&scan, &[1.0], fov, 4.0);
         // at 3 m, ±34.7° spans ±2.08 m of the right wall, which is only ±2 m tall: the whole wall
         assert!((new - 4.0).abs() < 1e-9, "{new}");

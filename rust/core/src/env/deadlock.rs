@@ -20,10 +20,7 @@ pub struct DeadlockConfig {
 
 impl Default for DeadlockConfig {
     fn default() -> Self {
-        Self {
-            window: 10.0,
-            displacement: 0.2,
-        }
+        Self { window: 10.0, displacement: 0.2 }
     }
 }
 
@@ -31,16 +28,10 @@ impl DeadlockConfig {
     /// Checks every field; the error names it.
     pub fn validate(&self) -> Result<()> {
         if !(self.window.is_finite() && self.window > 0.0) {
-            return Err(Error::invalid(
-                "deadlock_window",
-                format!("must be finite and > 0 s, got {}", self.window),
-            ));
+            return Err(Error::invalid("deadlock_window", format!("must be finite and > 0 s, got {}", self.window)));
         }
         if !(self.displacement.is_finite() && self.displacement > 0.0) {
-            return Err(Error::invalid(
-                "deadlock_displacement",
-                format!("must be finite and > 0 m, got {}", self.displacement),
-            ));
+            return Err(Error::invalid("deadlock_displacement", format!("must be finite and > 0 m, got {}", self.displacement)));
         }
         Ok(())
     }
@@ -57,10 +48,7 @@ impl DeadlockMonitor {
     /// Validates `config`.
     pub fn new(config: DeadlockConfig) -> Result<Self> {
         config.validate()?;
-        Ok(Self {
-            config,
-            history: VecDeque::new(),
-        })
+        Ok(Self { config, history: VecDeque::new() })
     }
 
     /// Forgets the history.
@@ -69,23 +57,14 @@ impl DeadlockMonitor {
     }
 
     /// Records the state at `time` and tells whether the robot is deadlocked now.
-    pub fn update(
-        &mut self,
-        time: Real,
-        position: Point2,
-        inspected: usize,
-        complete: bool,
-    ) -> bool {
+    pub fn update(&mut self, time: Real, position: Point2, inspected: usize, complete: bool) -> bool {
         self.history.push_back((time, position, inspected));
         // keep the newest sample at least `window` old as the reference
         while self.history.len() >= 2 && time - self.history[1].0 >= self.config.window - 1e-9 {
             self.history.pop_front();
         }
         let (t0, p0, n0) = self.history[0];
-        !complete
-            && time - t0 >= self.config.window - 1e-9
-            && n0 == inspected
-            && (position[0] - p0[0]).hypot(position[1] - p0[1]) < self.config.displacement
+        !complete && time - t0 >= self.config.window - 1e-9 && n0 == inspected && (position[0] - p0[0]).hypot(position[1] - p0[1]) < self.config.displacement
     }
 }
 
@@ -101,16 +80,9 @@ mod tests {
         let pos = |k: usize| [0.0003 * k as Real, 0.0];
         assert!(!m.update(0.0, pos(0), 3, false));
         for k in 1..500 {
-            assert!(
-                !m.update(k as Real * dt, pos(k), 3, false),
-                "{} s is short of the window",
-                k as Real * dt
-            );
+            assert!(!m.update(k as Real * dt, pos(k), 3, false), "{} s is short of the window", k as Real * dt);
         }
-        assert!(
-            m.update(500.0 * dt, pos(500), 3, false),
-            "10 s with 0.15 m net motion and no coverage"
-        );
+        assert!(m.update(500.0 * dt, pos(500), 3, false), "10 s with 0.15 m net motion and no coverage");
         // new coverage breaks the deadlock
         assert!(!m.update(501.0 * dt, pos(501), 4, false));
         // complete missions are never deadlocked
@@ -128,15 +100,7 @@ mod tests {
 
     #[test]
     fn bad_thresholds_are_rejected() {
-        assert!(DeadlockMonitor::new(DeadlockConfig {
-            window: 0.0,
-            ..Default::default()
-        })
-        .is_err());
-        assert!(DeadlockMonitor::new(DeadlockConfig {
-            displacement: Real::NAN,
-            ..Default::default()
-        })
-        .is_err());
+        assert!(DeadlockMonitor::new(DeadlockConfig { window: 0.0, ..Default::default() }).is_err());
+        assert!(DeadlockMonitor::new(DeadlockConfig { displacement: Real::NAN, ..Default::default() }).is_err());
     }
 }

@@ -26,11 +26,7 @@ pub struct RewardConfig {
 
 impl Default for RewardConfig {
     fn default() -> Self {
-        Self {
-            coverage: 1.0,
-            collision: 1.0,
-            intervention: 0.05,
-        }
+        Self { coverage: 1.0, collision: 1.0, intervention: 0.05 }
     }
 }
 
@@ -265,13 +261,7 @@ impl Episode {
     /// Validates `config`, builds the site of `seed` and resets.
     pub fn new(site: Site, mut config: EpisodeConfig, seed: u64) -> Result<Self> {
         if config.shield.semi_axes.len() != 2 {
-            return Err(Error::invalid(
-                "semi_axes",
-                format!(
-                    "the robot is planar: give 2 semi-axes, got {}",
-                    config.shield.semi_axes.len()
-                ),
-            ));
+            return Err(Error::invalid("semi_axes", format!("the robot is planar: give 2 semi-axes, got {}", config.shield.semi_axes.len())));
         }
         config.world.tracker.validate()?;
         if config.shield.u_max.is_none() {
@@ -285,16 +275,9 @@ impl Episode {
             return Err(Error::invalid("goal_tolerance", format!("must be finite and > 0 m, got {}", config.goal_tolerance)));
         }
         if !(config.waypoint_reach.is_finite() && config.waypoint_reach > 0.0) {
-            return Err(Error::invalid(
-                "waypoint_reach",
-                format!("must be finite and > 0 m, got {}", config.waypoint_reach),
-            ));
+            return Err(Error::invalid("waypoint_reach", format!("must be finite and > 0 m, got {}", config.waypoint_reach)));
         }
-        for (name, v) in [
-            ("coverage_reward", config.reward.coverage),
-            ("collision_penalty", config.reward.collision),
-            ("intervention_penalty", config.reward.intervention),
-        ] {
+        for (name, v) in [("coverage_reward", config.reward.coverage), ("collision_penalty", config.reward.collision), ("intervention_penalty", config.reward.intervention)] {
             if !v.is_finite() {
                 return Err(Error::invalid(name, format!("must be finite, got {v}")));
             }
@@ -308,18 +291,8 @@ impl Episode {
         let mut wc = config.world;
         wc.seed = world_seed(seed);
         let world = World::new(scenario, wc)?;
-        let coverage = Coverage::new(
-            &world.scenario().map.segments,
-            [world.true_pose().x, world.true_pose().y],
-            &config.coverage,
-        )?;
-        let cos_el = config
-            .world
-            .lidar
-            .elevations()
-            .iter()
-            .map(|e| e.cos())
-            .collect();
+        let coverage = Coverage::new(&world.scenario().map.segments, [world.true_pose().x, world.true_pose().y], &config.coverage)?;
+        let cos_el = config.world.lidar.elevations().iter().map(|e| e.cos()).collect();
         let mut ep = Self {
             site,
             config,
@@ -362,11 +335,7 @@ impl Episode {
             c.clear();
             c
         } else {
-            Coverage::new(
-                &world.scenario().map.segments,
-                [start.x, start.y],
-                &self.config.coverage,
-            )?
+            Coverage::new(&world.scenario().map.segments, [start.x, start.y], &self.config.coverage)?
         };
         self.world = world;
         self.seed = seed;
@@ -379,12 +348,7 @@ impl Episode {
         self.estimate_change = Pose2::default();
         self.velocity = [0.0; 3];
         self.last_command = [0.0; 3];
-        self.summary = EpisodeSummary {
-            min_clearance: Real::INFINITY,
-            min_h: Real::INFINITY,
-            deadlock_time: Real::NAN,
-            ..Default::default()
-        };
+        self.summary = EpisodeSummary { min_clearance: Real::INFINITY, min_h: Real::INFINITY, deadlock_time: Real::NAN, ..Default::default() };
         self.intervention_sum = 0.0;
         self.solve_time_sum = 0.0;
         self.in_contact = false;
@@ -394,28 +358,18 @@ impl Episode {
         self.inspect();
         let p = self.world.true_pose();
         let complete = self.coverage.fraction() >= self.config.coverage.goal;
-        self.deadlock
-            .update(0.0, [p.x, p.y], self.coverage.inspected_count(), complete);
+        self.deadlock.update(0.0, [p.x, p.y], self.coverage.inspected_count(), complete);
         let clearance = self.world.clearance();
         self.summary.coverage = self.coverage.fraction();
         self.summary.min_clearance = clearance;
-        self.last = StepReport {
-            clearance,
-            coverage: self.coverage.fraction(),
-            h: Real::NAN,
-            h_min: Real::NAN,
-            shield_feasible: true,
-            scanned: true,
-            ..Default::default()
-        };
+        self.last = StepReport { clearance, coverage: self.coverage.fraction(), h: Real::NAN, h_min: Real::NAN, shield_feasible: true, scanned: true, ..Default::default() };
         Ok(())
     }
 
     /// Inspects what the latest scan sees; returns the new length (m).
     fn inspect(&mut self) -> Real {
         let range = self.config.planner.d_view + self.config.coverage.margin;
-        self.coverage
-            .update(self.world.scan(), &self.cos_el, self.config.planner.fov_h, range)
+        self.coverage.update(self.world.scan(), &self.cos_el, self.config.planner.fov_h, range)
     }
 
     /// The robot's motion since the latest scan: the pose of the scan's body frame in the
@@ -466,14 +420,7 @@ impl Episode {
     /// shield → tracker and physics → LIDAR (at its rate) → coverage, reward, metrics.
     pub fn step(&mut self, action: [Real; 3]) -> Result<StepReport> {
         let estimate = self.world.estimated_pose();
-        let u_nom = nominal_command(
-            self.config.action_mode,
-            &action,
-            estimate,
-            &self.config.world.tracker,
-            &self.controller,
-            self.config.waypoint_reach,
-        )?;
+        let u_nom = nominal_command(self.config.action_mode, &action, estimate, &self.config.world.tracker, &self.controller, self.config.waypoint_reach)?;
         let w_max = self.config.world.tracker.w_max;
         let omega = u_nom[2].clamp(-w_max, w_max);
         let scan = PointScan::new_f32(&self.near, 3)?.moved(self.motion);
@@ -504,12 +451,7 @@ impl Episode {
         let p = step.true_pose;
         let at_goal = self.config.terminate_at_goal && self.world.scenario().goal.is_some_and(|g| (g.x - p.x).hypot(g.y - p.y) <= self.config.goal_tolerance);
         let complete = coverage >= self.config.coverage.goal || at_goal;
-        let deadlock = self.deadlock.update(
-            step.time,
-            [p.x, p.y],
-            self.coverage.inspected_count(),
-            complete,
-        );
+        let deadlock = self.deadlock.update(step.time, [p.x, p.y], self.coverage.inspected_count(), complete);
         let contact = step.contacts.any();
         let cost = if contact { 1.0 } else { 0.0 };
         let r = &self.config.reward;
@@ -581,11 +523,7 @@ impl Episode {
     pub fn observe(&self, out: &mut [f32]) -> Result<()> {
         let bins = self.config.observation.bins;
         if out.len() != self.config.observation.len() {
-            return Err(Error::DimensionMismatch {
-                name: "observation",
-                expected: self.config.observation.len(),
-                got: out.len(),
-            });
+            return Err(Error::DimensionMismatch { name: "observation", expected: self.config.observation.len(), got: out.len() });
         }
         out[..bins].copy_from_slice(&self.bins);
         let t = &self.config.world.tracker;
@@ -678,10 +616,6 @@ impl Episode {
 
     /// The estimated pose change over the last step (previous estimate's body frame).
     pub fn estimate_change(&self) -> Pose2 {
-        Pose2::new(
-            self.estimate_change.x,
-            self.estimate_change.y,
-            wrap_angle(self.estimate_change.yaw),
-        )
+        Pose2::new(self.estimate_change.x, self.estimate_change.y, wrap_angle(self.estimate_change.yaw))
     }
 }

@@ -27,11 +27,9 @@ mod episode;
 mod observation;
 mod pool;
 
-pub use batch::{AutoReset, Batch, SlotOutcome};
 pub use action::{check_action, nominal_command, ActionMode, ACTION_TOLERANCE};
-pub use coverage::{
-    Coverage, CoverageConfig, Piece, COVERAGE_GRID, LINE_OF_SIGHT_TOLERANCE, PROBE_OFFSET,
-};
+pub use batch::{AutoReset, Batch, SlotOutcome};
+pub use coverage::{Coverage, CoverageConfig, Piece, COVERAGE_GRID, LINE_OF_SIGHT_TOLERANCE, PROBE_OFFSET};
 pub use deadlock::{DeadlockConfig, DeadlockMonitor};
 pub use episode::{Episode, EpisodeConfig, EpisodeSummary, RewardConfig, Site, StepReport};
 pub use observation::{bin_ranges, ObservationConfig, PROPRIO_LEN};

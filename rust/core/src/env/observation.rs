@@ -33,13 +33,7 @@ impl ObservationConfig {
     /// Checks `bins` against the LIDAR's `columns`.
     pub fn validate(&self, columns: usize) -> Result<()> {
         if !(4..=columns).contains(&self.bins) {
-            return Err(Error::invalid(
-                "lidar_bins",
-                format!(
-                    "must be in [4, {columns}] (the LIDAR's columns), got {}",
-                    self.bins
-                ),
-            ));
+            return Err(Error::invalid("lidar_bins", format!("must be in [4, {columns}] (the LIDAR's columns), got {}", self.bins)));
         }
         Ok(())
     }
@@ -92,12 +86,7 @@ mod tests {
         ranges[0] = 4.0; // ahead
         ranges[15] = 2.0; // just right of ahead: same bin as ahead with 4 bins
         ranges[4] = 10.0; // left
-        let scan = Scan {
-            channels: 1,
-            columns: cols,
-            ranges,
-            ..Default::default()
-        };
+        let scan = Scan { channels: 1, columns: cols, ranges, ..Default::default() };
         let mut out = [0.0f32; 4];
         bin_ranges(&scan, &[1.0], 20.0, &mut out);
         assert_eq!(out, [0.1, 0.5, 1.0, 1.0]);

@@ -45,16 +45,7 @@ pub struct ViewPlannerConfig {
 
 impl Default for ViewPlannerConfig {
     fn default() -> Self {
-        Self {
-            d_view: 1.5,
-            gamma_h: 0.5,
-            gamma_v: 1.0,
-            fov_h: 69.4_f64.to_radians(),
-            fov_v: 45.0_f64.to_radians(),
-            horizon: 5,
-            planar: true,
-            reach_threshold: 0.3,
-        }
+        Self { d_view: 1.5, gamma_h: 0.5, gamma_v: 1.0, fov_h: 69.4_f64.to_radians(), fov_v: 45.0_f64.to_radians(), horizon: 5, planar: true, reach_threshold: 0.3 }
     }
 }
 

@@ -93,7 +93,13 @@ pub(crate) fn inner_rect_signed_distance(shape: &RobotShape, q: &[Point2]) -> Re
     }
     let mut best = (x0 - hx).max(-hx - x1).max((y0 - hy).max(-hy - y1));
     // the outline's edge normals (a segment has one)
-    let edges = if n == 2 { 1 } else if n == 1 { 0 } else { n };
+    let edges = if n == 2 {
+        1
+    } else if n == 1 {
+        0
+    } else {
+        n
+    };
     for i in 0..edges {
         let (a, b) = (q[i], q[(i + 1) % n]);
         let e = [b[0] - a[0], b[1] - a[1]];

@@ -452,10 +452,14 @@ impl PhysicsScene {
         let mut rep = ContactReport::default();
         let mut near = std::mem::take(&mut self.near);
         near.clear();
-        self.measure(NEAR_GROW, |_| CONTACT_TOLERANCE, |m| {
-            near.push(m);
-            rep.tally(m);
-        });
+        self.measure(
+            NEAR_GROW,
+            |_| CONTACT_TOLERANCE,
+            |m| {
+                near.push(m);
+                rep.tally(m);
+            },
+        );
         self.near = near;
         self.near_valid = true;
         self.deepest = rep.max_penetration;
@@ -849,11 +853,8 @@ mod tests {
     /// measured again), splitting steps near the walls.
     #[test]
     fn steps_from_the_last_steps_distances_are_the_steps_measured_afresh() {
-        let pushed = MovingObstacle {
-            name: "box".into(),
-            shape: Polygon::rect(-0.3, -0.3, 0.3, 0.3, 1.0),
-            trajectory: Trajectory::linear(Pose2::new(8.0, 0.0, 0.0), Pose2::new(1.0, 0.1, 0.5), 2.0, 12.0),
-        };
+        let pushed =
+            MovingObstacle { name: "box".into(), shape: Polygon::rect(-0.3, -0.3, 0.3, 0.3, 1.0), trajectory: Trajectory::linear(Pose2::new(8.0, 0.0, 0.0), Pose2::new(1.0, 0.1, 0.5), 2.0, 12.0) };
         let (sc, read, touching) = cached_and_fresh_agree(&corridor(), &[pushed], 1500, 25, 1.0);
         assert!(sc.rapier_steps() > 1500 + 500, "{} rapier steps for 1500", sc.rapier_steps());
         assert!(read > 1000 && touching > 100, "{read} steps read the distances, {touching} touching");

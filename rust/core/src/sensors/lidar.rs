@@ -27,9 +27,9 @@ use serde::{Deserialize, Serialize};
 
 use super::noise::{fill_standard_normal, fill_unit_uniform};
 use super::ray_segment::ray_segment_distance;
-use crate::simd::SimdLevel;
 use crate::error::{Error, Result};
 use crate::math::Real;
+use crate::simd::SimdLevel;
 use crate::world::{cross2, Pose2, Segment};
 
 /// Where the sensor sits on the robot: body-frame position (m; `z` is the height above the
@@ -153,11 +153,7 @@ impl LidarConfig {
         if self.rate_hz * dt > 1.0 + 1e-9 {
             return Err(Error::invalid(
                 "rate_hz",
-                format!(
-                    "{} Hz is faster than the control rate 1 / dt = {} Hz (dt = {dt} s): scans are taken at control steps; lower `rate_hz` or `dt`",
-                    self.rate_hz,
-                    1.0 / dt
-                ),
+                format!("{} Hz is faster than the control rate 1 / dt = {} Hz (dt = {dt} s): scans are taken at control steps; lower `rate_hz` or `dt`", self.rate_hz, 1.0 / dt),
             ));
         }
         Ok(())
@@ -399,11 +395,13 @@ impl Lidar {
                     let (prev, next) = (slice[j - 1], slice[j]);
                     let link_fwd = prev.b == next.a;
                     let link_bwd = prev.a == next.b;
-                    let ok = next.one_sided && next.height == first.height && match forward {
-                        None => link_fwd || link_bwd,
-                        Some(true) => link_fwd,
-                        Some(false) => link_bwd,
-                    };
+                    let ok = next.one_sided
+                        && next.height == first.height
+                        && match forward {
+                            None => link_fwd || link_bwd,
+                            Some(true) => link_fwd,
+                            Some(false) => link_bwd,
+                        };
                     if !ok {
                         break;
                     }

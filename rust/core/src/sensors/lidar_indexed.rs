@@ -13,11 +13,11 @@
 use rand::Rng;
 
 use super::lidar::{max, min, none_beyond, seg_origin_distance, Lidar, Scan};
-use crate::simd::SimdLevel;
+use super::lidar_mesh::ScanMesh;
 use crate::error::Result;
 use crate::math::Real;
+use crate::simd::SimdLevel;
 use crate::world::index::{is_behind, Piece, PieceLanes, CLASSES, LANES, SECTORS};
-use super::lidar_mesh::ScanMesh;
 use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
@@ -123,7 +123,17 @@ fn silhouette_lanes(x: Real, y: Real, x0: Real, y0: Real, x1: Real, y1: Real) ->
     let beside = left | right;
     let xs = if left { x0 } else { x1 };
     let ys = if below { y0 } else { y1 };
-    let pick = |d1: Real, d2: Real, side: Real, other: Real| if diag1 { d1 } else if diag2 { d2 } else if beside { side } else { other };
+    let pick = |d1: Real, d2: Real, side: Real, other: Real| {
+        if diag1 {
+            d1
+        } else if diag2 {
+            d2
+        } else if beside {
+            side
+        } else {
+            other
+        }
+    };
     ([pick(x1, x0, xs, x0), pick(y0, y0, y0, ys)], [pick(x0, x1, xs, x1), pick(y1, y1, y1, ys)])
 }
 
@@ -223,7 +233,8 @@ impl Lidar {
             v[r].as_chunks::<L>().0
         }
         let r = k0..k0 + len;
-        let (px, py, qx, qy, ax, ay) = (blocks::<L>(&l.px, r.clone()), blocks::<L>(&l.py, r.clone()), blocks::<L>(&l.qx, r.clone()), blocks::<L>(&l.qy, r.clone()), blocks::<L>(&l.ax, r.clone()), blocks::<L>(&l.ay, r.clone()));
+        let (px, py, qx, qy, ax, ay) =
+            (blocks::<L>(&l.px, r.clone()), blocks::<L>(&l.py, r.clone()), blocks::<L>(&l.qx, r.clone()), blocks::<L>(&l.qy, r.clone()), blocks::<L>(&l.ax, r.clone()), blocks::<L>(&l.ay, r.clone()));
         let (ex, ey, height) = (blocks::<L>(&l.ex, r.clone()), blocks::<L>(&l.ey, r.clone()), blocks::<L>(&l.height, r));
         let one_sided = l.one_sided[k0..k0 + len].as_chunks::<L>().0;
         let j0_out = out.j0[..len].as_chunks_mut::<L>().0;
@@ -257,7 +268,17 @@ impl Lidar {
     /// their sweeps.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn sweep_run<const L: usize>(&self, lanes: &PieceLanes, start: usize, pieces: &[Piece], run: std::ops::Range<usize>, f: &SensorFrame, beams: &mut BeamLanes, ranges: &mut [Real], stats: &mut IndexedScanStats) {
+    fn sweep_run<const L: usize>(
+        &self,
+        lanes: &PieceLanes,
+        start: usize,
+        pieces: &[Piece],
+        run: std::ops::Range<usize>,
+        f: &SensorFrame,
+        beams: &mut BeamLanes,
+        ranges: &mut [Real],
+        stats: &mut IndexedScanStats,
+    ) {
         if run.is_empty() {
             return;
         }

@@ -832,8 +832,10 @@ fn small_sweeps_avx512(sweeps: &[Sweep], jobs: &mut Vec<[u32; 2]>, big: &mut Vec
             let ae = _mm512_sub_pd(_mm512_mul_pd(a0, e1), _mm512_mul_pd(a1, e0));
             let den = _mm512_sub_pd(_mm512_mul_pd(dc, e1), _mm512_mul_pd(ds, e0));
             let sn = _mm512_sub_pd(_mm512_mul_pd(a0, ds), _mm512_mul_pd(a1, dc));
-            let ahead = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(den, zero) & _mm512_cmp_pd_mask::<_CMP_GE_OQ>(ae, zero) & _mm512_cmp_pd_mask::<_CMP_GE_OQ>(sn, zero) & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(sn, den);
-            let behind = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(den, zero) & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ae, zero) & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(sn, zero) & _mm512_cmp_pd_mask::<_CMP_GE_OQ>(sn, den);
+            let ahead =
+                _mm512_cmp_pd_mask::<_CMP_GT_OQ>(den, zero) & _mm512_cmp_pd_mask::<_CMP_GE_OQ>(ae, zero) & _mm512_cmp_pd_mask::<_CMP_GE_OQ>(sn, zero) & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(sn, den);
+            let behind =
+                _mm512_cmp_pd_mask::<_CMP_LT_OQ>(den, zero) & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ae, zero) & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(sn, zero) & _mm512_cmp_pd_mask::<_CMP_GE_OQ>(sn, den);
             let t = _mm512_div_pd(ae, den);
             let take = (ahead | behind) & on & _mm512_cmp_pd_mask::<_CMP_LT_OQ>(t, old);
             let new = _mm512_mask_mov_pd(old, take, t);
@@ -1281,7 +1283,11 @@ mod tests {
                     // along beam 0 (on its line, or beside it), for runs over it
                     2 if j <= 0 && j + count > 0 => {
                         let y = if rng.random_bool(0.5) { 0.0 } else { 0.5 };
-                        if rng.random_bool(0.5) { ([1.0, y], [4.0, y]) } else { ([4.0, y], [1.0, y]) }
+                        if rng.random_bool(0.5) {
+                            ([1.0, y], [4.0, y])
+                        } else {
+                            ([4.0, y], [1.0, y])
+                        }
                     }
                     _ => (at(rng.random_range(0.0..n as Real), rng.random_range(0.5..15.0)), at(rng.random_range(0.0..n as Real), rng.random_range(0.5..15.0))),
                 };

@@ -248,7 +248,11 @@ mod tests {
                         truth = if turn { Pose2::new(0.0, 0.0, 0.3 * t) } else { Pose2::new(speed * t, 0.0, 0.0) };
                         est = odo.update(t, truth, &mut rng);
                     }
-                    if turn { wrap_angle(est.yaw - truth.yaw) } else { est.x - truth.x }
+                    if turn {
+                        wrap_angle(est.yaw - truth.yaw)
+                    } else {
+                        est.x - truth.x
+                    }
                 })
                 .collect();
             let mean = errs.iter().sum::<Real>() / errs.len() as Real;

@@ -136,15 +136,7 @@ impl BrakingModel {
         let rho = delta + 2.0 * r * (0.5 * half_turn).sin() + self.margin;
         let grown = grow(semi_axes[0], semi_axes[1], rho);
         let (s, c) = heading.sin_cos();
-        Sweep {
-            chord: [c * end[0] + s * end[1], -s * end[0] + c * end[1]],
-            heading,
-            semi_axes: grown,
-            growth: rho,
-            here: grow(semi_axes[0], semi_axes[1], self.margin),
-            first_velocity,
-            steps,
-        }
+        Sweep { chord: [c * end[0] + s * end[1], -s * end[0] + c * end[1]], heading, semi_axes: grown, growth: rho, here: grow(semi_axes[0], semi_axes[1], self.margin), first_velocity, steps }
     }
 }
 
@@ -249,7 +241,11 @@ fn least_h_body<T: Lane, const K: usize>(sweeps: &[Sweep; K], pts: &[T], stride:
             let t = ((qx * sx * ia + qy * sy * ib) * inv_qs).clamp(0.0, 1.0);
             let (dx, dy) = (qx - t * sx, qy - t * sy);
             let h = dx * dx * ia + dy * dy * ib - 1.0;
-            if skip { f64::MAX } else { h }
+            if skip {
+                f64::MAX
+            } else {
+                h
+            }
         });
         let here = x * x * ha + y * y * hb - 1.0;
         (least, if skip { f64::MAX } else { here })

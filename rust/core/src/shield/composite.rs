@@ -255,26 +255,14 @@ impl<T: Lane, const L: usize> Acc<T, L> {
             finite &= self.fin[j] == T::ZERO;
         }
         let red = |a: &[T; L]| a.iter().map(|v| v.to_f64()).sum::<f64>();
-        let sums = Sums {
-            s: red(&self.s),
-            cx: red(&self.cx),
-            cy: red(&self.cy),
-            cz: red(&self.cz),
-            cxy: red(&self.cxy),
-            cxz: red(&self.cxz),
-            cyz: red(&self.cyz),
-        };
+        let sums = Sums { s: red(&self.s), cx: red(&self.cx), cy: red(&self.cy), cz: red(&self.cz), cxy: red(&self.cxy), cxz: red(&self.cxz), cyz: red(&self.cyz) };
         (best, self.cnt.iter().map(|&c| c as usize).sum(), finite, sums)
     }
 }
 
 /// One pass over the scan in blocks of `L` points.
 #[inline(always)]
-fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const SUMS: bool, const FIXED: bool, const M: bool>(
-    pts: &[T],
-    k: &Coeffs<T>,
-    shift: T,
-) -> (T, usize, bool, Sums) {
+fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const SUMS: bool, const FIXED: bool, const M: bool>(pts: &[T], k: &Coeffs<T>, shift: T) -> (T, usize, bool, Sums) {
     let mut acc = Acc::<T, L>::new();
     let blocks = pts.chunks_exact(L * S);
     let tail = blocks.remainder();
@@ -293,10 +281,7 @@ fn pass<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, 
 /// `κ` (≥ every `−κ tanh(·)`) in one fused pass when `κ ≤ T::MAX_FIXED_SHIFT`, else by the
 /// exact `−κ tanh(h_min/γ)` found in a first pass.
 #[inline(always)]
-fn both_passes<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const M: bool>(
-    pts: &[T],
-    k: &Coeffs<T>,
-) -> (T, usize, bool, Sums, T) {
+fn both_passes<T: Lane, const S: usize, const D: usize, const L: usize, const F: bool, const M: bool>(pts: &[T], k: &Coeffs<T>) -> (T, usize, bool, Sums, T) {
     if k.kappa.to_f64() <= T::MAX_FIXED_SHIFT {
         let (hmin, n, finite, sums) = pass::<T, S, D, L, F, true, true, M>(pts, k, k.kappa2);
         return (hmin, n, finite, sums, k.kappa);

@@ -106,14 +106,7 @@ impl LinearConstraints {
 }
 
 fn settings() -> DefaultSettings<f64> {
-    DefaultSettingsBuilder::default()
-        .verbose(false)
-        .max_iter(100)
-        .tol_feas(1e-12)
-        .tol_gap_abs(1e-12)
-        .tol_gap_rel(1e-12)
-        .build()
-        .expect("static Clarabel settings are valid")
+    DefaultSettingsBuilder::default().verbose(false).max_iter(100).tol_feas(1e-12).tol_gap_abs(1e-12).tol_gap_rel(1e-12).build().expect("static Clarabel settings are valid")
 }
 
 /// `A` in CSC for `n` variables: the `M` rows negated (`−a_kᵀx + s = −c_k`), then the box

@@ -4,18 +4,7 @@
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
 /// A floating-point scalar the composite kernel is generic over.
-pub trait Lane:
-    Copy
-    + PartialOrd
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
-    + Send
-    + Sync
-    + 'static
-{
+pub trait Lane: Copy + PartialOrd + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self> + Send + Sync + 'static {
     /// 0.
     const ZERO: Self;
     /// 1.

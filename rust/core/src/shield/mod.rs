@@ -32,12 +32,12 @@ mod scan;
 
 use std::time::Instant;
 
-pub use composite::{evaluate_composite, evaluate_composite_moved, CompositeBarrier, CompositeParams, Motion, SimdLevel};
+pub use braking::{BrakingModel, Sweep};
 use composite::composite_of_valid;
+pub use composite::{evaluate_composite, evaluate_composite_moved, CompositeBarrier, CompositeParams, Motion, SimdLevel};
 pub use conic::{solve_rows, LinearConstraints};
 pub use ellipsoid::{Envelope, MAX_SEMI_AXIS, MIN_SEMI_AXIS};
 pub use lane::Lane;
-pub use braking::{BrakingModel, Sweep};
 pub use qp::{project_halfspace_box, QpSolution, MAX_VARS};
 pub use scan::{select_points, ScanFilter, ScanScratch, MAX_ANGULAR_BINS};
 
@@ -74,10 +74,7 @@ impl ShieldMethod {
             "distance" => Ok(Self::Distance),
             "hardmin" => Ok(Self::HardMin),
             "none" => Ok(Self::Unfiltered),
-            other => Err(Error::invalid(
-                "method",
-                format!("unknown method {other:?}; expected \"braking\", \"composite\", \"distance\", \"hardmin\" or \"none\""),
-            )),
+            other => Err(Error::invalid("method", format!("unknown method {other:?}; expected \"braking\", \"composite\", \"distance\", \"hardmin\" or \"none\""))),
         }
     }
 
@@ -504,9 +501,7 @@ impl Shield {
                 }
                 recovering = b.h_min < 0.0;
                 if dim == 2 && !recovering && b.num_points > 0 {
-                    let v0 = *state.velocity.as_ref().ok_or_else(|| {
-                        Error::invalid("velocity", "the braking shield needs the body's measured velocity (v_x, v_y, ω), body frame")
-                    })?;
+                    let v0 = *state.velocity.as_ref().ok_or_else(|| Error::invalid("velocity", "the braking shield needs the body's measured velocity (v_x, v_y, ω), body frame"))?;
                     let cmd = crate::math::mat_t_vec(&r, &[sol.u[0], sol.u[1], 0.0]);
                     let semi = self.envelope.semi_axes();
                     // the row's command, else the largest of its fractions that passes, else the
@@ -639,14 +634,7 @@ impl Shield {
     /// `z − position[2]`). The points are taken to the body frame,
     /// `Rᵀ(p_i − p_r)`, so only relative positions matter (an odometry jump that moves robot
     /// and points together changes nothing).
-    pub fn filter_world(
-        &mut self,
-        scan: &Scan,
-        position: &Vec3,
-        state: &BodyState,
-        u_nom: &[f64],
-        extra: Option<&LinearConstraints>,
-    ) -> Result<ShieldOutcome> {
+    pub fn filter_world(&mut self, scan: &Scan, position: &Vec3, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<ShieldOutcome> {
         finite("position", position)?;
         if scan.motion.is_some() {
             return Err(Error::invalid("motion", "applies to body-frame scans; move world-frame points yourself"));

@@ -86,14 +86,7 @@ pub struct ScanScratch {
 /// Copies into `out` (row-major, `dim` coordinates per point) the points of `pts` (`stride`
 /// per point) that pass crop and height band, down-sampled as `filter` asks. `pts` must be
 /// finite (callers check).
-pub fn select_points<T: Lane>(
-    pts: &[T],
-    stride: usize,
-    envelope: &Envelope,
-    filter: &ScanFilter,
-    scratch: &mut ScanScratch,
-    out: &mut Vec<T>,
-) {
+pub fn select_points<T: Lane>(pts: &[T], stride: usize, envelope: &Envelope, filter: &ScanFilter, scratch: &mut ScanScratch, out: &mut Vec<T>) {
     let dim = envelope.dim();
     let crop2 = filter.crop_radius.map_or(f64::INFINITY, |r| r * r);
     let band = if stride == 3 && dim == 2 { filter.height_band } else { None };

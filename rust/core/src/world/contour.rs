@@ -158,9 +158,7 @@ fn overlapping(chains: &[&[Vertex]]) -> Vec<(usize, usize)> {
     }
     let orient = |a: Vertex, b: Vertex, c: Vertex| ((b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)).signum();
     // `p` strictly inside the segment `a b`
-    let inside = |p: Vertex, a: Vertex, b: Vertex| {
-        orient(a, b, p) == 0 && p != a && p != b && (a.0.min(b.0)..=a.0.max(b.0)).contains(&p.0) && (a.1.min(b.1)..=a.1.max(b.1)).contains(&p.1)
-    };
+    let inside = |p: Vertex, a: Vertex, b: Vertex| orient(a, b, p) == 0 && p != a && p != b && (a.0.min(b.0)..=a.0.max(b.0)).contains(&p.0) && (a.1.min(b.1)..=a.1.max(b.1)).contains(&p.1);
     let mut bad = vec![false; ids.len()];
     for list in buckets.values() {
         for (k, &(i, a, b)) in list.iter().enumerate() {

@@ -125,7 +125,13 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     if !(cfg.margin.is_finite() && (0.0..=0.3).contains(&cfg.margin)) {
         return Err(Error::invalid("margin", format!("must be in [0, 0.3] m, got {}", cfg.margin)));
     }
-    if !(cfg.footprint.width.is_finite() && cfg.footprint.length.is_finite() && cfg.footprint.width > 0.0 && cfg.footprint.length >= cfg.footprint.width && cfg.footprint.width <= 0.8 && cfg.footprint.length <= 1.6) {
+    if !(cfg.footprint.width.is_finite()
+        && cfg.footprint.length.is_finite()
+        && cfg.footprint.width > 0.0
+        && cfg.footprint.length >= cfg.footprint.width
+        && cfg.footprint.width <= 0.8
+        && cfg.footprint.length <= 1.6)
+    {
         return Err(Error::invalid("footprint", format!("needs 0 < width <= length, width <= 0.8 m, length <= 1.6 m (corridors are 1.0-3.0 m), got {:?}", cfg.footprint)));
     }
     if !(cfg.wall_height.is_finite() && cfg.wall_height > 0.0) {
@@ -149,7 +155,13 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
     let mut waypoints = vec![[goal.x, goal.y]];
     for c in &corridors[1..] {
         // the branch's far end, END_INSET in from its tip
-        let far = if c.horizontal() { [if c.x0 < main.x0 { c.x0 + END_INSET } else { c.x1 - END_INSET }, 0.5 * (c.y0 + c.y1)] } else if c.y0 < yc { [0.5 * (c.x0 + c.x1), c.y0 + END_INSET] } else { [0.5 * (c.x0 + c.x1), c.y1 - END_INSET] };
+        let far = if c.horizontal() {
+            [if c.x0 < main.x0 { c.x0 + END_INSET } else { c.x1 - END_INSET }, 0.5 * (c.y0 + c.y1)]
+        } else if c.y0 < yc {
+            [0.5 * (c.x0 + c.x1), c.y0 + END_INSET]
+        } else {
+            [0.5 * (c.x0 + c.x1), c.y1 - END_INSET]
+        };
         waypoints.push(far);
     }
     let mut furniture: Vec<Furniture> = Vec::new();
@@ -168,10 +180,18 @@ pub fn generate(seed: u64, cfg: &GeneratorConfig) -> Result<GeneratedSite> {
         }
         let rect = if c.horizontal() {
             let x = rng.random_range(c.x0 + 2.0..(c.x1 - 2.0 - length).max(c.x0 + 2.5));
-            if side { [x, c.y1 - depth, x + length, c.y1] } else { [x, c.y0, x + length, c.y0 + depth] }
+            if side {
+                [x, c.y1 - depth, x + length, c.y1]
+            } else {
+                [x, c.y0, x + length, c.y0 + depth]
+            }
         } else {
             let y = rng.random_range(c.y0 + 2.0..(c.y1 - 2.0 - length).max(c.y0 + 2.5));
-            if side { [c.x1 - depth, y, c.x1, y + length] } else { [c.x0, y, c.x0 + depth, y + length] }
+            if side {
+                [c.x1 - depth, y, c.x1, y + length]
+            } else {
+                [c.x0, y, c.x0 + depth, y + length]
+            }
         };
         if !grid.rect_is(rect[0], rect[1], rect[2], rect[3], Cell::Free) {
             continue;

@@ -192,7 +192,11 @@ impl OccupancyGrid {
             while a < ups.len() || b < downs.len() {
                 let take_up = b == downs.len() || (a < ups.len() && ups[a].0 < downs[b].0);
                 let (run, is_up) = if take_up { (ups[a], true) } else { (downs[b], false) };
-                if take_up { a += 1 } else { b += 1 }
+                if take_up {
+                    a += 1
+                } else {
+                    b += 1
+                }
                 emit(&mut out, [run.0 as Real * r, j as Real * r], [(run.1 + 1) as Real * r, j as Real * r], is_up);
             }
             // vertical edges of row j on grid lines x = i: solid on exactly one side, side =
@@ -334,7 +338,11 @@ mod tests {
             .map(|k| {
                 let f = |m: usize| ((k * m) % 97) as Real * 0.0371 - 0.3;
                 let (x, y, l) = (f(7), f(13), f(29) - 1.0);
-                if k % 2 == 0 { Segment::new([x, y], [x + l, y], 1.0) } else { Segment::new([x, y], [x, y + l * 0.05 / 0.05], 1.0) }
+                if k % 2 == 0 {
+                    Segment::new([x, y], [x + l, y], 1.0)
+                } else {
+                    Segment::new([x, y], [x, y + l * 0.05 / 0.05], 1.0)
+                }
             })
             .chain([Segment::new([0.5, 0.5], [2.0, 0.5], 1.0), Segment::new([1.0, 0.25], [1.0, 3.0], 1.0), Segment::new([-1.0, 1.0], [1.0, 1.0], 1.0)])
             .collect();
@@ -474,10 +482,7 @@ mod tests {
         let d = g.distance_field(|c| c != Cell::Free);
         for j in 0..11 {
             for i in 0..17 {
-                let bf = [(0, 0), (5, 7), (16, 3), (9, 9)]
-                    .iter()
-                    .map(|&(a, b): &(i32, i32)| (((a - i as i32).pow(2) + (b - j as i32).pow(2)) as Real).sqrt() * 0.1)
-                    .fold(Real::INFINITY, Real::min);
+                let bf = [(0, 0), (5, 7), (16, 3), (9, 9)].iter().map(|&(a, b): &(i32, i32)| (((a - i as i32).pow(2) + (b - j as i32).pow(2)) as Real).sqrt() * 0.1).fold(Real::INFINITY, Real::min);
                 assert!((d[j * 17 + i] - bf).abs() < 1e-12, "({i},{j}) {} vs {bf}", d[j * 17 + i]);
             }
         }

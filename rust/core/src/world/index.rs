@@ -431,7 +431,15 @@ fn clip(a: Point2, b: Point2, lo: Point2, hi: Point2) -> Option<(Point2, Point2)
     if t0 > t1 {
         return None;
     }
-    let at = |t: Real| if t <= 0.0 { a } else if t >= 1.0 { b } else { [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])] };
+    let at = |t: Real| {
+        if t <= 0.0 {
+            a
+        } else if t >= 1.0 {
+            b
+        } else {
+            [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+        }
+    };
     Some((at(t0), at(t1)))
 }
 
@@ -463,7 +471,7 @@ mod tests {
     fn pieces_cover_each_wall_inside_their_buckets() {
         let mut walls = vec![Segment::new([-5.0, 3.0], [80.0, 3.0], 2.0), Segment::new([0.1, 0.2], [7.3, 9.9], 2.0), Segment::new([4.0, 4.0], [4.0, 1.0], 2.0)];
         walls.push(Segment::new([2.9, 2.9], [3.1, 3.1], 1.0)); // a bucket corner
-        // on a bucket edge that rounds to above it: -3.9 + 3 * 1.0 = -0.8999999999999999
+                                                               // on a bucket edge that rounds to above it: -3.9 + 3 * 1.0 = -0.8999999999999999
         let edge = vec![Segment::new([0.0, -3.9], [30.0, -3.9], 2.0), Segment::new([23.8, -0.9], [30.0, -0.9], 2.0)];
         for (walls, cell) in [(walls, 1.5), (edge, 1.0)] {
             check_pieces(&walls, cell);
@@ -474,11 +482,9 @@ mod tests {
     /// overflowed and the index panicked).
     #[test]
     fn too_many_buckets_is_an_error_not_a_panic() {
-        for (walls, cell) in [
-            (vec![Segment::new([0.0, 0.0], [10.0, 0.0], 2.0)], 1e-300),
-            (vec![Segment::new([-1e20, 0.0], [1e20, 0.0], 2.0)], 1.0),
-            (vec![Segment::new([0.0, 0.0], [1e5, 1e5], 2.0)], 0.01),
-        ] {
+        for (walls, cell) in
+            [(vec![Segment::new([0.0, 0.0], [10.0, 0.0], 2.0)], 1e-300), (vec![Segment::new([-1e20, 0.0], [1e20, 0.0], 2.0)], 1.0), (vec![Segment::new([0.0, 0.0], [1e5, 1e5], 2.0)], 0.01)]
+        {
             let e = SegmentIndex::new(walls, cell).unwrap_err().to_string();
             assert!(e.contains("`cell`"), "{e}");
         }
@@ -594,7 +600,18 @@ mod tests {
                 // (the index's lanes run on into the next bucket's; a bucket's own end in padding)
                 let (l, r) = (idx.lanes(), start..start + pieces.len() + LANES);
                 let cut = |v: &Vec<Real>| v[r.clone()].to_vec();
-                let lanes = PieceLanes { px: cut(&l.px), py: cut(&l.py), qx: cut(&l.qx), qy: cut(&l.qy), ax: cut(&l.ax), ay: cut(&l.ay), ex: cut(&l.ex), ey: cut(&l.ey), height: cut(&l.height), one_sided: l.one_sided[r.clone()].to_vec() };
+                let lanes = PieceLanes {
+                    px: cut(&l.px),
+                    py: cut(&l.py),
+                    qx: cut(&l.qx),
+                    qy: cut(&l.qy),
+                    ax: cut(&l.ax),
+                    ay: cut(&l.ay),
+                    ex: cut(&l.ex),
+                    ey: cut(&l.ey),
+                    height: cut(&l.height),
+                    one_sided: l.one_sided[r.clone()].to_vec(),
+                };
                 let own = PieceLanes::of(pieces);
                 let n = pieces.len();
                 assert_eq!((&lanes.px[..n], &lanes.py[..n], &lanes.qx[..n], &lanes.qy[..n]), (&own.px[..n], &own.py[..n], &own.qx[..n], &own.qy[..n]));

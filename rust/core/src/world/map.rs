@@ -51,9 +51,7 @@ impl StaticMap {
     pub fn bounds(&self) -> Option<(Point2, Point2)> {
         let mut it = self.segments.iter().flat_map(|s| [s.a, s.b]);
         let first = it.next()?;
-        Some(it.fold((first, first), |(lo, hi), p| {
-            ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
-        }))
+        Some(it.fold((first, first), |(lo, hi), p| ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])))
     }
 
     /// Distance from `p` to the nearest wall (m); `inf` for an empty map.

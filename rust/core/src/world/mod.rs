@@ -22,6 +22,7 @@ pub mod traverse;
 
 pub use contour::{simplify_walls, thin_corner};
 pub use geometry::{cross2, norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
+pub use grid::{Cell, OccupancyGrid};
 pub use index::SegmentIndex;
 pub use map::StaticMap;
 pub use moving::{MovingObstacle, Trajectory};
@@ -29,5 +30,4 @@ pub use preset::{preset, PRESET_NAMES};
 pub use rosmap::{load_ros_map, RosMap, RosMapOptions};
 pub use scenario::{Scenario, COORDINATE_LIMIT, TIME_LIMIT, YAW_LIMIT};
 pub use sim::{StepOutcome, World, WorldConfig, CLEARANCE_BUDGET, CLEARANCE_SEARCH, FREE_STEP_MARGIN, SCAN_ALL_WALLS_MAX, SCAN_PROBE_EVERY, SCAN_PROBE_MAX, SCAN_PROBE_SLOWER};
-pub use grid::{Cell, OccupancyGrid};
 pub use traverse::{footprint_reachability, Footprint, Reachability};

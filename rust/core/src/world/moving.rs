@@ -128,7 +128,10 @@ impl MovingObstacle {
         self.shape.validate("obstacle.shape")?;
         if !self.shape.is_convex() {
             // (the physics collides with the hull, the LIDAR would see the outline)
-            return Err(Error::invalid("obstacle.shape", format!("`{}`: must be convex (a moving body collides as its convex hull; make a non-convex one of several obstacles), got {:?}", self.name, self.shape.vertices)));
+            return Err(Error::invalid(
+                "obstacle.shape",
+                format!("`{}`: must be convex (a moving body collides as its convex hull; make a non-convex one of several obstacles), got {:?}", self.name, self.shape.vertices),
+            ));
         }
         self.trajectory.validate()
     }

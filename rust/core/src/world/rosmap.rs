@@ -728,10 +728,18 @@ pub fn load_ros_map(yaml: impl AsRef<Path>, options: &RosMapOptions) -> Result<R
         let p = grid.origin.transform_point(corner);
         if !(p[0].abs() <= COORDINATE_LIMIT && p[1].abs() <= COORDINATE_LIMIT) {
             let field = if meta.origin[0].abs().max(meta.origin[1].abs()) > COORDINATE_LIMIT { "field origin" } else { "field resolution" };
-            return Err(Error::map_file(yaml, field, format!("the map ({} × {} cells of {} m from origin {:?}) reaches ({}, {}); it must lie within {COORDINATE_LIMIT} m of (0, 0)", grid.width, grid.height, meta.resolution, meta.origin, p[0], p[1])));
+            return Err(Error::map_file(
+                yaml,
+                field,
+                format!(
+                    "the map ({} × {} cells of {} m from origin {:?}) reaches ({}, {}); it must lie within {COORDINATE_LIMIT} m of (0, 0)",
+                    grid.width, grid.height, meta.resolution, meta.origin, p[0], p[1]
+                ),
+            ));
         }
     }
-    let (start, start_clearance) = interior_start(&grid).ok_or_else(|| Error::map_file(yaml, "map", "no free region inside the building (away from the image border and the unknown around the map) is wide enough to start in"))?;
+    let (start, start_clearance) = interior_start(&grid)
+        .ok_or_else(|| Error::map_file(yaml, "map", "no free region inside the building (away from the image border and the unknown around the map) is wide enough to start in"))?;
     let mut map = StaticMap::new();
     let unknown_is_wall = options.unknown_is_wall;
     let solid = |c: Cell| c == Cell::Occupied || (unknown_is_wall && c == Cell::Unknown);
@@ -917,10 +925,18 @@ fn interior_start(grid: &OccupancyGrid) -> Option<(Pose2, Real)> {
                     stack.push(n);
                 }
             };
-            if i > 0 { visit(c - 1); }
-            if i + 1 < w { visit(c + 1); }
-            if j > 0 { visit(c - w); }
-            if j + 1 < h { visit(c + w); }
+            if i > 0 {
+                visit(c - 1);
+            }
+            if i + 1 < w {
+                visit(c + 1);
+            }
+            if j > 0 {
+                visit(c - w);
+            }
+            if j + 1 < h {
+                visit(c + w);
+            }
         }
         next += 1;
         if !border && clearance[best] >= START_CLEARANCE {
@@ -1127,7 +1143,15 @@ mod tests {
         let frame = |i: usize, j: usize, (w, h): (usize, usize)| i == 0 || j == 0 || i == w - 1 || j == h - 1;
         let inside = |i: usize, j: usize| (40..160).contains(&i) && (40..120).contains(&j);
         let walls = |i: usize, j: usize| (38..162).contains(&i) && (38..122).contains(&j) && !inside(i, j);
-        let yaml = write_map(&d, "closed", (200, 160), 0.05, |i, j| if frame(i, j, (200, 160)) { UNK } else if walls(i, j) { OCC } else { FREE });
+        let yaml = write_map(&d, "closed", (200, 160), 0.05, |i, j| {
+            if frame(i, j, (200, 160)) {
+                UNK
+            } else if walls(i, j) {
+                OCC
+            } else {
+                FREE
+            }
+        });
         let m = load_ros_map(&yaml, &RosMapOptions::default()).unwrap();
         assert_eq!(known_area(&m.grid), Some([1, 198, 1, 158]));
         let (i, j) = start_cell(&m);
@@ -1138,7 +1162,15 @@ mod tests {
         let inside = |i: usize, j: usize| (20..140).contains(&i) && (20..100).contains(&j);
         let door = |i: usize, j: usize| (140..142).contains(&i) && (50..70).contains(&j);
         let walls = |i: usize, j: usize| (18..142).contains(&i) && (18..102).contains(&j) && !inside(i, j) && !door(i, j);
-        let yaml = write_map(&d, "door", (300, 240), 0.05, |i, j| if frame(i, j, (300, 240)) { UNK } else if walls(i, j) { OCC } else { FREE });
+        let yaml = write_map(&d, "door", (300, 240), 0.05, |i, j| {
+            if frame(i, j, (300, 240)) {
+                UNK
+            } else if walls(i, j) {
+                OCC
+            } else {
+                FREE
+            }
+        });
         let m = load_ros_map(&yaml, &RosMapOptions::default()).unwrap();
         let (i, j) = start_cell(&m);
         assert!(inside(i, j), "start at cell ({i}, {j}), outside the building");

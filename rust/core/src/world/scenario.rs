@@ -204,8 +204,7 @@ impl Scenario {
                 return Err(Error::map_file(path, format!("line {}", k + 1), format!("a scenario file is one JSON object, `{{ ... }}` (docs/world.md, \"Scenario file\"), not `{shown}`")));
             }
         }
-        let f: ScenarioFile = serde_json::from_str(text)
-            .map_err(|e| Error::map_file(path, format!("line {} column {}", e.line(), e.column()), e.to_string()))?;
+        let f: ScenarioFile = serde_json::from_str(text).map_err(|e| Error::map_file(path, format!("line {} column {}", e.line(), e.column()), e.to_string()))?;
         let mut map = StaticMap::new();
         for (i, w) in f.walls.into_iter().enumerate() {
             w.validate("walls").map_err(|e| Error::map_file(path, format!("walls[{i}]"), e.to_string()))?;
@@ -224,14 +223,7 @@ impl Scenario {
             };
             obstacles.push(MovingObstacle { name: o.name, shape: o.shape, trajectory });
         }
-        let sc = Scenario {
-            name: f.name.unwrap_or_else(|| "scenario".into()),
-            map,
-            start: f.start,
-            goal: f.goal,
-            obstacles,
-            odometry: f.odometry,
-        };
+        let sc = Scenario { name: f.name.unwrap_or_else(|| "scenario".into()), map, start: f.start, goal: f.goal, obstacles, odometry: f.odometry };
         sc.start.validate("start").map_err(|e| Error::map_file(path, "start", e.to_string()))?;
         for (i, o) in sc.obstacles.iter().enumerate() {
             o.validate().map_err(|e| Error::map_file(path, format!("obstacles[{i}]"), e.to_string()))?;
@@ -325,8 +317,16 @@ mod tests {
             (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "c", {tri}, "trajectory": {{"keys": [[0.0, {{"x": 1e9, "y": 0, "yaw": 0}}]]}}}}]}}"#), "`trajectory`"),
             (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "c", {tri}, "trajectory": {{"keys": [[1e300, {{"x": 1, "y": 0, "yaw": 0}}]]}}}}]}}"#), "`trajectory`"),
             (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "p", {tri}, "walk": {{"waypoints": [[1e9, 0], [2, 0]], "speed": 1.0}}}}]}}"#), "`trajectory`"),
-            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "p", {tri}, "walk": {{"waypoints": [[5, 0], [2, 0]], "speed": 1.0, "start_time": 1e308}}}}]}}"#), "`start_time`"),
-            (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "v", "shape": {{"vertices": [[0, 0], [1e9, 0], [1, 1]], "height": 1}}, "trajectory": {{"keys": [[0.0, {{"x": 1, "y": 0, "yaw": 0}}]]}}}}]}}"#), "`obstacle.shape`"),
+            (
+                format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "p", {tri}, "walk": {{"waypoints": [[5, 0], [2, 0]], "speed": 1.0, "start_time": 1e308}}}}]}}"#),
+                "`start_time`",
+            ),
+            (
+                format!(
+                    r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "obstacles": [{{"name": "v", "shape": {{"vertices": [[0, 0], [1e9, 0], [1, 1]], "height": 1}}, "trajectory": {{"keys": [[0.0, {{"x": 1, "y": 0, "yaw": 0}}]]}}}}]}}"#
+                ),
+                "`obstacle.shape`",
+            ),
             (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "odometry": {{{odo}, "faults": [{{"kind": "jump", "time": 1.0, "dx": 1e300, "dy": 0.0}}]}}}}"#), "`odometry.faults`"),
             (format!(r#"{{{wall}, "start": {{"x": 2, "y": 0, "yaw": 0}}, "odometry": {{{odo}, "faults": [{{"kind": "yaw_jump", "time": 1.0, "dyaw": 1e9}}]}}}}"#), "`odometry.faults`"),
         ];

@@ -211,11 +211,7 @@ impl World {
         let index = SegmentIndex::new(scenario.map.segments.clone(), 2.0)?;
         // (a failed triangulation leaves the index alone)
         let big_planar = scenario.map.segments.len() > SCAN_ALL_WALLS_MAX && config.lidar.channels == 1;
-        let mesh = if !big_planar {
-            None
-        } else {
-            mesh.or_else(|| ScanMesh::new(&scenario.map.segments).ok().map(Arc::new))
-        };
+        let mesh = if !big_planar { None } else { mesh.or_else(|| ScanMesh::new(&scenario.map.segments).ok().map(Arc::new)) };
         let mut w = Self {
             scenario,
             config,

@@ -27,9 +27,9 @@
 
 use super::cspace::{self, Cover, Space, ORIENTATIONS};
 use super::geometry::{Point2, Pose2};
-use super::grid::OccupancyGrid;
 #[cfg(doc)]
 use super::grid::Cell;
+use super::grid::OccupancyGrid;
 use crate::error::{Error, Result};
 use crate::math::Real;
 
@@ -230,8 +230,8 @@ mod tests {
         g.fill_rect(5.0, 2.1, 8.0, 2.9, Cell::Free);
         let r = footprint_reachability(&g, Footprint::default(), 0.05, Pose2::new(2.0, 2.5, 0.0)).unwrap();
         assert!(r.reaches([6.9, 2.5])); // the disc cover is conservative at the ends by ~0.3 m
-        // but it cannot turn around in it: heading +x at the entrance is reached, heading
-        // -y (sideways) deep inside is not, so a cell needing sideways fit is not reached
+                                        // but it cannot turn around in it: heading +x at the entrance is reached, heading
+                                        // -y (sideways) deep inside is not, so a cell needing sideways fit is not reached
         let mut g2 = OccupancyGrid::new(200, 100, 0.05, Pose2::default(), Cell::Occupied).unwrap();
         g2.fill_rect(0.5, 0.5, 5.0, 4.5, Cell::Free);
         g2.fill_rect(5.0, 2.1, 8.0, 2.9, Cell::Free);
