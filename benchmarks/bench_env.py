@@ -1,12 +1,13 @@
 """Benchmark of the Gymnasium environments: `env.step` and `env.reset` through `gymnasium.make`
 with the registered wrappers (TimeLimit, OrderEnforcing, PassiveEnvChecker, the episode
-summary), the 1024-column LIDAR at 10 Hz, control at 50 Hz and the composite shield.
+summary), the 1024-column LIDAR at 10 Hz, control at 50 Hz, under each shield of `--shields`
+(default: the environments' braking shield and the paper's composite).
 
 Random actions (drawn once, cycled) keep the robot moving without touching the policy's cost;
 episodes that end are reset, and resets are timed apart from steps. Writes
 `results/bench_env.json`.
 
-    python benchmarks/bench_env.py [--steps 50000] [--resets 20]
+    python benchmarks/bench_env.py [--steps 50000] [--resets 20] [--shields braking composite]
 """
 
 from __future__ import annotations
@@ -26,8 +27,8 @@ IDS = ["shieldnav/CorridorInspection-v0", "shieldnav/ConstrictedPassage-v0", "sh
        "shieldnav/DynamicObstacles-v0", "shieldnav/MapInspection-v0"]
 
 
-def bench_steps(env_id: str, steps: int, seed: int = 0) -> dict[str, float]:
-    env = gym.make(env_id)
+def bench_steps(env_id: str, steps: int, shield: str, seed: int = 0) -> dict[str, float]:
+    env = gym.make(env_id, shield=shield)
     actions = np.random.default_rng(seed).uniform(-1, 1, (4096, 3)).astype(np.float32)
     env.reset(seed=seed)
     step_time, done_steps, resets = 0.0, 0, 0
@@ -52,8 +53,8 @@ def bench_steps(env_id: str, steps: int, seed: int = 0) -> dict[str, float]:
     return {"steps_per_s": done_steps / step_time, "us_per_step": 1e6 * step_time / done_steps, "resets": resets}
 
 
-def bench_resets(env_id: str, resets: int) -> dict[str, float]:
-    env = gym.make(env_id)
+def bench_resets(env_id: str, resets: int, shield: str) -> dict[str, float]:
+    env = gym.make(env_id, shield=shield)
     env.reset(seed=0)
     times = []
     for s in tqdm(range(1, resets + 1), desc=f"reset {env_id.split('/')[1]}", leave=False):
@@ -68,14 +69,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=50_000, help="steps per environment")
     ap.add_argument("--resets", type=int, default=20, help="timed resets per environment")
+    ap.add_argument("--shields", nargs="+", default=["braking", "composite"])
     ap.add_argument("--out", default="results/bench_env.json")
     args = ap.parse_args()
     rows = {}
     for env_id in IDS:
-        rows[env_id] = {**bench_steps(env_id, args.steps), **bench_resets(env_id, args.resets)}
-    print(f"{'environment':36s} {'steps/s':>10s} {'µs/step':>8s} {'reset median':>13s} {'reset max':>10s}")
-    for env_id, r in rows.items():
-        print(f"{env_id:36s} {r['steps_per_s']:10.0f} {r['us_per_step']:8.1f} {r['reset_ms_median']:10.2f} ms {r['reset_ms_max']:7.2f} ms")
+        for shield in args.shields:
+            rows[f"{env_id} {shield}"] = {**bench_steps(env_id, args.steps, shield), **bench_resets(env_id, args.resets, shield)}
+    print(f"{'environment, shield':46s} {'steps/s':>10s} {'µs/step':>8s} {'reset median':>13s} {'reset max':>10s}")
+    for key, r in rows.items():
+        print(f"{key:46s} {r['steps_per_s']:10.0f} {r['us_per_step']:8.1f} {r['reset_ms_median']:10.2f} ms {r['reset_ms_max']:7.2f} ms")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     meta = {"shieldnav": shieldnav.__version__, "python": platform.python_version(), "machine": platform.processor() or platform.machine()}

@@ -1,5 +1,5 @@
 """Benchmark of the native vector environment: N episodes stepped in Rust per call (1024-column
-LIDAR at 10 Hz, control at 50 Hz, the composite shield), random actions drawn once and cycled.
+LIDAR at 10 Hz, control at 50 Hz, the default braking shield), random actions drawn once and cycled.
 Reports environment steps per second for several batch sizes and thread counts. Writes
 `results/bench_vector.json`.
 
