@@ -344,6 +344,52 @@ pub fn evaluate_composite<T: Lane>(pts: &[T], stride: usize, p: &CompositeParams
     evaluate_composite_moved(pts, stride, None, p, level)
 }
 
+/// The composite barrier written as the paper's equations, one point at a time in `f64`: the
+/// readable reference that [`evaluate_composite`]'s fused kernel is tested against (not used in
+/// the filter). `points` are body-frame points (`z` ignored by a planar envelope, except for
+/// the height band); crop and height band as in the kernel.
+///
+/// - `h_i = p_iᵀ A p_i − 1` ([`Envelope::h_body`]), `∂h_i/∂p_r = −2 A p_i`, and
+///   `∂h_i/∂t = 2 ω · (A p_i × p_i)` ([`Envelope::grad_body`], [`Envelope::dh_dt_body`]);
+/// - `H = −(γ/κ) log Σ_i exp(−κ tanh(h_i/γ))`, capped by `γ tanh(h_min/γ)`;
+/// - `∂H/∂p_r = Σ_i λ_i sech²(h_i/γ) ∂h_i/∂p_r` and `∂H/∂t = Σ_i λ_i sech²(h_i/γ) ∂h_i/∂t`,
+///   with `λ_i = exp(−κ tanh(h_i/γ)) / Σ_j exp(−κ tanh(h_j/γ))`.
+pub fn composite_reference(points: &[Vec3], p: &CompositeParams) -> CompositeBarrier {
+    let planar = p.envelope.dim() == 2;
+    let kept: Vec<Vec3> = points
+        .iter()
+        .filter(|q| p.crop_radius.is_none_or(|r| q[0] * q[0] + q[1] * q[1] + if planar { 0.0 } else { q[2] * q[2] } <= r * r))
+        .filter(|q| !planar || p.height_band.is_none_or(|(lo, hi)| (lo..=hi).contains(&q[2])))
+        .map(|q| if planar { [q[0], q[1], 0.0] } else { *q })
+        .collect();
+    if kept.is_empty() {
+        return CompositeBarrier { value: p.gamma, h_min: f64::MAX, grad_body: [0.0; 3], dh_dt: 0.0, grad_omega: [0.0; 3], num_points: 0 };
+    }
+    let (g, k) = (p.gamma, p.kappa);
+    let h: Vec<f64> = kept.iter().map(|q| p.envelope.h_body(q)).collect();
+    let h_min = h.iter().copied().fold(f64::INFINITY, f64::min);
+    // the exponents −κ tanh(h_i/γ), shifted by their largest so the sum is at least 1
+    let shift = -k * (h_min / g).tanh();
+    let e: Vec<f64> = h.iter().map(|&hi| (-k * (hi / g).tanh() - shift).exp()).collect();
+    let sum: f64 = e.iter().sum();
+    let soft = -(g / k) * (sum.ln() + shift);
+    let (mut grad, mut grad_omega) = ([0.0; 3], [0.0; 3]);
+    let a = p.envelope.inv_sq();
+    for ((q, &hi), &ei) in kept.iter().zip(&h).zip(&e) {
+        let weight = ei / sum / (hi / g).cosh().powi(2); // λ_i sech²(h_i/γ)
+        let gi = p.envelope.grad_body(q);
+        // ∂h_i/∂t = ω · 2 (A p × p): its coefficient of ω
+        let ap = [a[0] * q[0], a[1] * q[1], a[2] * q[2]];
+        let wi = [2.0 * (ap[1] * q[2] - ap[2] * q[1]), 2.0 * (ap[2] * q[0] - ap[0] * q[2]), 2.0 * (ap[0] * q[1] - ap[1] * q[0])];
+        for d in 0..3 {
+            grad[d] += weight * gi[d];
+            grad_omega[d] += weight * wi[d];
+        }
+    }
+    let dh_dt = (0..3).map(|d| grad_omega[d] * p.omega[d]).sum();
+    CompositeBarrier { value: soft.min(g * (h_min / g).tanh()), h_min, grad_body: grad, dh_dt, grad_omega, num_points: kept.len() }
+}
+
 /// [`evaluate_composite`] on points that are first moved by `motion` (see [`Motion`]), in
 /// the same pass: crop, height band and barrier see the moved points.
 pub fn evaluate_composite_moved<T: Lane>(pts: &[T], stride: usize, motion: Option<Motion>, p: &CompositeParams, level: SimdLevel) -> Result<CompositeBarrier> {

@@ -34,7 +34,7 @@ use std::time::Instant;
 
 pub use braking::{BrakingModel, Sweep};
 use composite::composite_of_valid;
-pub use composite::{evaluate_composite, evaluate_composite_moved, CompositeBarrier, CompositeParams, Motion, SimdLevel};
+pub use composite::{composite_reference, evaluate_composite, evaluate_composite_moved, CompositeBarrier, CompositeParams, Motion, SimdLevel};
 pub use conic::{solve_rows, LinearConstraints};
 pub use ellipsoid::{Envelope, MAX_SEMI_AXIS, MIN_SEMI_AXIS};
 pub use lane::Lane;
