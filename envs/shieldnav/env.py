@@ -169,20 +169,8 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / float(self.config["dt"])}
         #: How many times the env has been reset (agents check that they were reset with it).
         self.resets = 0
-        n = self._episode.observation_len
-        bins = n - 9
-        # the odometry change is unbounded in principle (a jump); the command (body frame,
-        # scaled by the tracker's limits) is at most as long as the shield's box, the tracker's
-        # limits or the controller's box (world and waypoint actions; turned into the body
-        # frame, so by length), and its yaw rate within the tracker's or the controller's
-        big = _POSE_BOUND
-        c = self.config
-        v_max = np.asarray(c["v_max"], float)
-        box = np.asarray(c["u_max"] if c["u_max"] is not None else c["v_max"], float)
-        reach = max(np.hypot(*box), np.hypot(*v_max), np.hypot(*np.asarray(c["controller_u_max"], float)))
-        cmd = np.array([*(reach / v_max), max(1.0, float(c["omega_max"]) / float(c["w_max"]))])
-        low = np.concatenate([np.zeros(bins), [-big, -big, -np.pi], -np.ones(3), -cmd]).astype(np.float32)
-        high = np.concatenate([np.ones(bins), [big, big, np.pi], np.ones(3), cmd]).astype(np.float32)
+        # the bounds the core derives from its validated configuration
+        low, high = self._episode.observation_bounds()
         flat = spaces.Box(low, high, dtype=np.float32)
         if observation == "flat":
             self.observation_space: spaces.Space[Any] = flat

@@ -261,6 +261,12 @@ impl PyEpisode {
         self.inner.observation_len()
     }
 
+    /// `(low, high)` of the flat observation under this configuration (float32 arrays).
+    fn observation_bounds<'py>(&self, py: Python<'py>) -> (Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>) {
+        let (low, high) = self.inner.observation_bounds();
+        (PyArray1::from_vec(py, low), PyArray1::from_vec(py, high))
+    }
+
     /// `(channels, columns, max_range)` of the LIDAR.
     #[getter]
     fn lidar_shape(&self) -> (usize, usize, f64) {

@@ -545,6 +545,15 @@ impl Episode {
         self.config.observation.len()
     }
 
+    /// The flat observation's bounds `(low, high)` under this episode's configuration (see
+    /// [`super::observation::observation_bounds`]).
+    pub fn observation_bounds(&self) -> (Vec<f32>, Vec<f32>) {
+        let c = &self.config;
+        let t = &c.world.tracker;
+        let shield_box = c.shield.u_max.as_ref().map(|m| [m[0], m[1]]);
+        super::observation::observation_bounds(c.observation.bins, t.v_max, t.w_max, shield_box, c.controller.u_max, c.controller.omega_max)
+    }
+
     /// Every valid return of the latest scan in the current body frame, `[x, y, z]` rows (m),
     /// with its scan index (`channel · columns + column`). Computed on each call.
     pub fn points(&self) -> (Vec<Real>, Vec<u32>) {

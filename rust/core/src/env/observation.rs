@@ -49,6 +49,28 @@ impl ObservationConfig {
     }
 }
 
+/// Bound of the odometry change's `Δx, Δy` in [`observation_bounds`] (m): unbounded in
+/// principle, finite for the observation space.
+pub const POSE_BOUND: f32 = 1.0e9;
+
+/// The flat observation's bounds `(low, high)`, each of length `bins + 9`, as the layout above
+/// gives them. The command's bound is what the tracker's scaling can show: the longest of the
+/// shield's box (`shield_box`, the tracker's `v_max` without one), the tracker's `v_max` and the
+/// controller's `controller_u_max` (world and waypoint actions arrive turned into the body
+/// frame, so by length), over each `v_max` component; the yaw rate's, the larger of the
+/// tracker's and the controller's over `w_max`, at least 1.
+pub fn observation_bounds(bins: usize, v_max: [Real; 2], w_max: Real, shield_box: Option<[Real; 2]>, controller_u_max: [Real; 2], omega_max: Real) -> (Vec<f32>, Vec<f32>) {
+    let boxed = shield_box.unwrap_or(v_max);
+    let reach = boxed[0].hypot(boxed[1]).max(v_max[0].hypot(v_max[1])).max(controller_u_max[0].hypot(controller_u_max[1]));
+    let cmd = [reach / v_max[0], reach / v_max[1], (omega_max / w_max).max(1.0)].map(|v| v as f32);
+    let pi = std::f32::consts::PI;
+    let mut high = vec![1.0f32; bins];
+    high.extend_from_slice(&[POSE_BOUND, POSE_BOUND, pi, 1.0, 1.0, 1.0, cmd[0], cmd[1], cmd[2]]);
+    let mut low = vec![0.0f32; bins];
+    low.extend(high[bins..].iter().map(|v| -v));
+    (low, high)
+}
+
 /// Writes the range bins of `scan` into `out` (length `bins`). `cos_el` holds the cosine of
 /// each channel's elevation.
 pub fn bin_ranges(scan: &Scan, cos_el: &[Real], max_range: Real, out: &mut [f32]) {
@@ -78,6 +100,22 @@ pub fn bin_ranges(scan: &Scan, cos_el: &[Real], max_range: Real, out: &mut [f32]
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bounds_follow_the_layout() {
+        // the tracker's 1.6 × 0.8 m/s and 1.5 rad/s, a 2 × 2 shield box, the controller's 1 × 1
+        let (low, high) = observation_bounds(4, [1.6, 0.8], 1.5, Some([2.0, 2.0]), [1.0, 1.0], 1.0);
+        assert_eq!(low.len(), 4 + PROPRIO_LEN);
+        assert_eq!(&high[..4], &[1.0; 4]);
+        assert_eq!(&low[..4], &[0.0; 4]);
+        assert_eq!(&high[4..10], &[POSE_BOUND, POSE_BOUND, std::f32::consts::PI, 1.0, 1.0, 1.0]);
+        let reach = 8f64.sqrt();
+        assert_eq!(&high[10..], &[(reach / 1.6) as f32, (reach / 0.8) as f32, 1.0]);
+        assert!(low.iter().zip(&high).skip(4).all(|(l, h)| *l == -*h));
+        // without a box the tracker's limits bound the command; a fast controller's yaw rate widens ω
+        let (_, high) = observation_bounds(4, [1.6, 0.8], 1.5, None, [1.0, 1.0], 3.0);
+        assert_eq!(&high[10..], &[(1.6f64.hypot(0.8) / 1.6) as f32, (1.6f64.hypot(0.8) / 0.8) as f32, 2.0]);
+    }
 
     #[test]
     fn bins_take_the_nearest_return_and_centre_bin_zero_ahead() {
