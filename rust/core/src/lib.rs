@@ -15,6 +15,7 @@ pub mod planner;
 pub mod robot;
 pub mod sensors;
 pub mod shield;
+pub mod sim;
 pub mod simd;
 pub mod world;
 

@@ -5,7 +5,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shieldnav_core::robot::footprint::footprint_signed_distance;
 use shieldnav_core::robot::{PhysicsScene, RobotShape, TrackerConfig};
-use shieldnav_core::world::{preset, MovingObstacle, Polygon, Pose2, Scenario, Segment, StaticMap, Trajectory, World, WorldConfig};
+use shieldnav_core::sim::{World, WorldConfig};
+use shieldnav_core::world::{preset, MovingObstacle, Polygon, Pose2, Scenario, Segment, StaticMap, Trajectory};
 
 #[path = "common/distance.rs"]
 mod distance;
@@ -331,7 +332,7 @@ fn walls_stay_rigid_with_the_robot_pinned_in_a_corner() {
 /// Steps `world` `steps` times at random commands (seeded by `seed` and the control period,
 /// each held 0.5 s), calling `each` with every step's outcome and the footprint's deepest
 /// penetration into the walls after it (checked against the step's contact report).
-fn drive_at_random(world: &mut World, seed: u64, steps: usize, mut each: impl FnMut(&shieldnav_core::world::StepOutcome, f64)) {
+fn drive_at_random(world: &mut World, seed: u64, steps: usize, mut each: impl FnMut(&shieldnav_core::sim::StepOutcome, f64)) {
     let dt = world.config().dt;
     let shape = world.config().robot;
     let mut rng = ChaCha8Rng::seed_from_u64(seed * 7919 + dt.to_bits());

@@ -5,7 +5,7 @@ use shieldnav_core::robot::footprint_segment_distance;
 mod distance;
 use distance::reference_distance;
 use shieldnav_core::sensors::LidarConfig;
-use shieldnav_core::world::{World, WorldConfig};
+use shieldnav_core::sim::{World, WorldConfig};
 
 fn noisy(seed: u64) -> WorldConfig {
     let mut c = WorldConfig { seed, ..Default::default() };
@@ -178,7 +178,8 @@ fn clearance_equals_brute_force_along_trajectories() {
 fn small_worlds_scan_as_the_index_does() {
     use rand::SeedableRng;
     use shieldnav_core::sensors::{Lidar, Scan};
-    use shieldnav_core::world::{SegmentIndex, SCAN_ALL_WALLS_MAX};
+    use shieldnav_core::sim::SCAN_ALL_WALLS_MAX;
+    use shieldnav_core::world::SegmentIndex;
     let cfg = WorldConfig { lidar: LidarConfig { range_noise_std: 0.0, ..Default::default() }, ..Default::default() };
     let mut w = World::from_preset("dynamic_obstacles", cfg).unwrap();
     assert!(w.scenario().map.segments.len() <= SCAN_ALL_WALLS_MAX && !w.scenario().obstacles.is_empty());

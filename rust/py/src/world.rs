@@ -1,6 +1,6 @@
 //! `shieldnav._core.World`: build a world (preset, procedural site, ROS map or scenario file),
 //! step it with a body-frame command, read the LIDAR, poses and contacts as numpy arrays.
-//! Each method converts, calls `shieldnav_core::world::World`, and maps errors; nothing here
+//! Each method converts, calls `shieldnav_core::sim::World`, and maps errors; nothing here
 //! computes.
 //!
 //! The scan, poses and contacts are read-only numpy views of buffers this object owns
@@ -17,8 +17,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
 use shieldnav_core::robot::{RobotShape, TrackerConfig};
 use shieldnav_core::sensors::{LidarConfig, LidarMount};
+use shieldnav_core::sim::{World, WorldConfig};
 use shieldnav_core::world::generate::{GeneratorConfig, SiteKind};
-use shieldnav_core::world::{Footprint, RosMapOptions, World, WorldConfig};
+use shieldnav_core::world::{Footprint, RosMapOptions};
 
 use crate::errors::{invalid, to_py, InvalidArgumentError};
 use shieldnav_core::Error;

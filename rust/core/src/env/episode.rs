@@ -9,8 +9,9 @@ use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::planner::ViewPlannerConfig;
 use crate::shield::{move_points, BodyState, BrakingModel, Motion, Scan as PointScan, Shield, ShieldConfig, ShieldMethod, ShieldOutcome};
+use crate::sim::{World, WorldConfig};
 use crate::world::generate::{generate, GeneratorConfig};
-use crate::world::{preset, wrap_angle, Pose2, Scenario, World, WorldConfig};
+use crate::world::{preset, wrap_angle, Pose2, Scenario};
 
 /// Reward weights: `r = coverage · (new inspected length, m) − collision · cost − intervention ·
 /// ‖u* − u_nom‖`. `Default`: 1, 1, 0.05.
@@ -546,7 +547,7 @@ impl Episode {
     }
 
     /// The flat observation's bounds `(low, high)` under this episode's configuration (see
-    /// [`super::observation::observation_bounds`]).
+    /// `env::observation::observation_bounds`).
     pub fn observation_bounds(&self) -> (Vec<f32>, Vec<f32>) {
         let c = &self.config;
         let t = &c.world.tracker;

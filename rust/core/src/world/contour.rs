@@ -23,7 +23,7 @@ type Vertex = (i64, i64);
 /// not on the order of `walls`.
 ///
 /// Every wall keeps its height; a point of a simplified wall lies within `tolerance` cells of
-/// the staircase it replaces, and within [`MAX_CUT`] cells on the solid side where `thin`
+/// the staircase it replaces, and within `MAX_CUT` (¼) cells on the solid side where `thin`
 /// marks a vertex at a corner of a solid cell one cell thick.
 pub fn simplify_walls(grid: &OccupancyGrid, walls: &[Segment], tolerance: Real, fixed: impl Fn(Vertex) -> bool, thin: impl Fn(Vertex) -> bool) -> Result<Vec<Segment>> {
     if !(tolerance.is_finite() && tolerance >= 0.0) {

@@ -9,6 +9,9 @@ use super::geometry::{norm2, sub2, wrap_angle, Point2, Polygon, Pose2, Segment};
 use crate::error::{Error, Result};
 use crate::math::Real;
 
+/// The latest time (s) of a scenario's scripts (obstacles' key poses, odometry faults).
+pub const TIME_LIMIT: Real = 1.0e7;
+
 /// How long (s) a walker ([`Trajectory::walk`]) takes to turn at a corner.
 pub const WALK_TURN_TIME: Real = 0.2;
 
@@ -45,8 +48,8 @@ impl Trajectory {
         if waypoints.len() < 2 {
             return Err(Error::invalid("waypoints", format!("need at least 2, got {}", waypoints.len())));
         }
-        if !t_start.is_finite() || t_start.abs() > super::scenario::TIME_LIMIT {
-            return Err(Error::invalid("start_time", format!("must be within {:?} s, got {t_start:?}", super::scenario::TIME_LIMIT)));
+        if !t_start.is_finite() || t_start.abs() > TIME_LIMIT {
+            return Err(Error::invalid("start_time", format!("must be within {:?} s, got {t_start:?}", TIME_LIMIT)));
         }
         let mut t = t_start;
         let mut keys = Vec::with_capacity(2 * waypoints.len());

@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::geometry::{Polygon, Pose2, Segment};
 use super::map::StaticMap;
-use super::moving::{MovingObstacle, Trajectory};
+use super::moving::{MovingObstacle, Trajectory, TIME_LIMIT};
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::robot::{footprint_segment_distance, RobotShape};
@@ -39,8 +39,6 @@ use crate::sensors::{OdometryConfig, OdometryFault};
 pub const COORDINATE_LIMIT: Real = 1.0e5;
 /// The largest yaw (rad) of a scenario's poses and odometry yaw jumps.
 pub const YAW_LIMIT: Real = 1.0e4;
-/// The latest time (s) of a scenario's scripts (obstacles' key poses, odometry faults).
-pub const TIME_LIMIT: Real = 1.0e7;
 
 /// Everything that defines an episode's world before any command is given.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -3,7 +3,7 @@
 //! one seeded RNG.
 //!
 //! ```
-//! use shieldnav_core::world::{World, WorldConfig};
+//! use shieldnav_core::sim::{World, WorldConfig};
 //! let mut w = World::from_preset("dynamic_obstacles", WorldConfig::default()).unwrap();
 //! let out = w.step([0.5, 0.0, 0.0]).unwrap();
 //! assert!(out.true_pose.x > 1.0 && !out.contacts.any());
@@ -17,16 +17,13 @@ use std::time::Instant;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::generate::{generate, GeneratorConfig};
-use super::geometry::{wrap_angle, Pose2, Segment};
-use super::index::SegmentIndex;
-use super::preset::preset;
-use super::rosmap::{load_ros_map, RosMapOptions};
-use super::scenario::Scenario;
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::robot::{footprint_segment_distance, ContactReport, PhysicsScene, RobotShape, Tracker, TrackerConfig};
 use crate::sensors::{Lidar, LidarConfig, Odometry, Scan, ScanMesh};
+use crate::world::generate::{generate, GeneratorConfig};
+use crate::world::index::SegmentIndex;
+use crate::world::{load_ros_map, preset, wrap_angle, Pose2, RosMapOptions, Scenario, Segment};
 
 /// Distance (m) within which [`World::clearance`] first searches the wall index.
 pub const CLEARANCE_SEARCH: Real = 2.0;
@@ -242,7 +239,7 @@ impl World {
         Ok(w)
     }
 
-    /// A world of the named preset (see [`super::preset()`]).
+    /// A world of the named preset (see [`crate::world::preset()`]).
     pub fn from_preset(name: &str, config: WorldConfig) -> Result<Self> {
         Self::new(preset(name)?, config)
     }
