@@ -5,9 +5,10 @@
 # test extras include torch (about 5 GB with its CUDA wheels) for the training smoke test.
 set -euo pipefail
 source "$(dirname "$0")/env.sh" .venv-test test ci
-echo "== installed in ${SECONDS} s; cargo fmt --check, ruff check =="
+echo "== installed in ${SECONDS} s; cargo fmt --check, ruff check, cargo clippy =="
 cargo fmt --check
 ruff check envs agents tests benchmarks
+cargo clippy --quiet --profile ci --workspace --all-targets -- -D warnings
 echo "== ${SECONDS} s; cargo test (rust/core) =="
 cargo test --quiet --profile ci
 echo "== ${SECONDS} s; pytest =="

@@ -142,7 +142,9 @@ pub fn simplify_walls(grid: &OccupancyGrid, walls: &[Segment], tolerance: Real, 
 /// it, in order. Exact: the vertices are integers.
 fn overlapping(chains: &[&[Vertex]]) -> Vec<(usize, usize)> {
     const BUCKET: i64 = 16;
-    let mut buckets: HashMap<(i64, i64), Vec<(usize, Vertex, Vertex)>> = HashMap::new();
+    // per bucket of the grid of vertices: the segments (index, ends) whose box meets it
+    type Bucket = Vec<(usize, Vertex, Vertex)>;
+    let mut buckets: HashMap<(i64, i64), Bucket> = HashMap::new();
     let mut ids = Vec::new();
     for (c, pts) in chains.iter().enumerate() {
         for (k, w) in pts.windows(2).enumerate() {
