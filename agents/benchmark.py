@@ -204,7 +204,7 @@ def main(argv: list[str] | None = None) -> dict[tuple[str, str], dict[str, Any]]
     ap.add_argument("--scenarios", nargs="+", type=env_id, default=None, help="environment ids (default: all five; --quick: the paper's three)")
     ap.add_argument("--shields", nargs="+", default=SHIELDS, choices=SHIELDS)
     ap.add_argument("--seeds", type=positive_int, default=None, help="seeds per scenario and shield (default 3; --quick: 1)")
-    ap.add_argument("--policy", default="scripted", help="'scripted', a saved SB3 model (.zip) or 'module:callable'")
+    ap.add_argument("--policy", default="scripted", help="'scripted', 'ppo' (the shipped policy), a saved SB3 model (.zip) or 'module:callable'")
     ap.add_argument("--backend", default="local", choices=["local", "ray"])
     ap.add_argument("--ray-address", default=None, help="Ray cluster address (default: start a local Ray)")
     ap.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1, help="parallel episodes")

@@ -22,9 +22,15 @@ Policy = Callable[[Any, dict[str, Any]], np.ndarray]
 
 
 def load_policy(spec: str, env: gym.Env[Any, Any]) -> tuple[Policy, Callable[[], None]]:
-    """``(act, reset)`` for a policy spec: ``"scripted"`` (the inspection agent), a saved SB3
+    """``(act, reset)`` for a policy spec: ``"scripted"`` (the inspection agent), ``"ppo"``
+    (the shipped PPO policy, numpy only), a saved SB3
     model (``*.zip``, PPO or SAC), or ``"module:callable"`` where ``callable(env)`` returns
     ``act(obs, info) -> action`` (and may have a ``reset()``)."""
+    if spec == "ppo":
+        from shieldnav.policies import load
+
+        policy = load("ppo", env)
+        return policy.act, policy.reset
     if spec == "scripted":
         from shieldnav.scripted import InspectionAgent
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from shieldnav.exceptions import ShieldnavError
 
-POLICIES = ("zero", "random", "scripted")
+POLICIES = ("zero", "random", "scripted", "ppo")
 
 
 def _settings(pairs: Sequence[str]) -> dict[str, Any]:
@@ -142,6 +142,10 @@ def cmd_run(args: argparse.Namespace) -> None:
 
         agent = InspectionAgent(env)
         agent.reset()
+    elif args.policy == "ppo":
+        from shieldnav.policies import load
+
+        agent = load("ppo", env)
     frames = []
     steps = 0
     while True:
