@@ -435,3 +435,23 @@ fn braking_inputs_name_the_argument() {
     assert!(err.contains("velocity"), "{err}");
     assert!(BodyState::planar(0.0, 0.0).unwrap().with_velocity([f64::NAN, 0.0, 0.0]).unwrap_err().to_string().contains("velocity"));
 }
+
+/// A point so far away that its `h` overflows to infinity is down-sampled like any other: the
+/// voxel or bin keeps it, and the shield answers as it does without down-sampling (the cell
+/// used to stay empty and the filter indexed past the scan).
+#[test]
+fn a_point_whose_h_overflows_is_kept_by_its_cell() {
+    let pts = [0.0, 1e155, 1.0, 0.0];
+    let state = BodyState::planar(0.0, 0.0).unwrap();
+    let plain =
+        Shield::new(ShieldConfig { scan: ScanFilter { crop_radius: None, ..ScanFilter::default() }, ..ShieldConfig::default() }).unwrap().filter(&Scan::new_f64(&pts, 2).unwrap(), &state, &[1.0, 0.0]);
+    for scan in [ScanFilter { crop_radius: None, voxel_size: Some(1.0), ..ScanFilter::default() }, ScanFilter { crop_radius: None, angular_bins: Some(16), ..ScanFilter::default() }] {
+        let mut shield = Shield::new(ShieldConfig { scan, ..ShieldConfig::default() }).unwrap();
+        let got = shield.filter(&Scan::new_f64(&pts, 2).unwrap(), &state, &[1.0, 0.0]);
+        match (&got, &plain) {
+            (Ok(a), Ok(b)) => assert_eq!((a.u, a.num_points), (b.u, b.num_points), "{scan:?}"),
+            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{scan:?}"),
+            _ => panic!("{scan:?}: {got:?} against {plain:?} without down-sampling"),
+        }
+    }
+}

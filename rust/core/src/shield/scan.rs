@@ -125,7 +125,9 @@ pub fn select_points<T: Lane>(pts: &[T], stride: usize, envelope: &Envelope, fil
             };
             let h = h_of(&p);
             let slot = if dense { &mut scratch.bins[e * bins + a] } else { scratch.cells.entry((a as i64, e as i64, 0)).or_insert((f64::INFINITY, usize::MAX)) };
-            if h < slot.0 {
+            // (the first point of a cell is kept whatever its h: an h that overflows to
+            // infinity, of a point 1e155 m away, must not leave the cell empty)
+            if h < slot.0 || slot.1 == usize::MAX {
                 *slot = (h, i);
             }
         }
@@ -146,7 +148,9 @@ pub fn select_points<T: Lane>(pts: &[T], stride: usize, envelope: &Envelope, fil
             let key = ((p[0] / v).floor() as i64, (p[1] / v).floor() as i64, if dim == 3 { (p[2] / v).floor() as i64 } else { 0 });
             let h = h_of(&p);
             let slot = scratch.cells.entry(key).or_insert((f64::INFINITY, usize::MAX));
-            if h < slot.0 {
+            // (the first point of a cell is kept whatever its h: an h that overflows to
+            // infinity, of a point 1e155 m away, must not leave the cell empty)
+            if h < slot.0 || slot.1 == usize::MAX {
                 *slot = (h, i);
             }
         }

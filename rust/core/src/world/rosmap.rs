@@ -607,8 +607,8 @@ fn read_pgm(bytes: &[u8], path: &Path) -> Result<GreyImage> {
         return Err(bad("header", format!("bad size {w} x {h} or maxval {maxval}")));
     }
     let bpp = if maxval > 255 { 2 } else { 1 };
-    let Some(n) = w.checked_mul(h).filter(|n| n.checked_mul(bpp).is_some()) else {
-        return Err(bad("header", format!("size {w} x {h}: too many pixels")));
+    let Some(n) = w.checked_mul(h).filter(|n| n.checked_mul(bpp).is_some() && *n <= MAX_IMAGE_PIXELS) else {
+        return Err(bad("header", format!("size {w} x {h}: more than the {MAX_IMAGE_PIXELS} pixels a map image may have")));
     };
     // a pixel value of row `k / w` from the top, column `k % w`, at most maxval
     let value = |k: usize, v: usize| -> Result<u8> {
@@ -657,6 +657,10 @@ fn read_png(bytes: &[u8], path: &Path) -> Result<GreyImage> {
     let mut dec = png::Decoder::new(std::io::Cursor::new(bytes));
     dec.set_transformations(png::Transformations::normalize_to_color8());
     let mut reader = dec.read_info().map_err(|e| bad(e.to_string()))?;
+    let (w, h) = (reader.info().width as usize, reader.info().height as usize);
+    if w.saturating_mul(h) > MAX_IMAGE_PIXELS {
+        return Err(Error::map_file(path, "header", format!("size {w} x {h}: more than the {MAX_IMAGE_PIXELS} pixels a map image may have")));
+    }
     let size = reader.output_buffer_size().ok_or_else(|| bad("image too large".into()))?;
     let mut buf = vec![0u8; size];
     let info = reader.next_frame(&mut buf).map_err(|e| bad(e.to_string()))?;
@@ -800,9 +804,36 @@ fn walls_beyond(grid: &OccupancyGrid, beyond: Cell, solid: impl Fn(Cell) -> bool
     Ok(walls)
 }
 
+/// The most pixels a map image may have (8192 × 8192): its header is checked before anything
+/// is allocated, so a small file declaring a huge image is an error, not an abort.
+pub const MAX_IMAGE_PIXELS: usize = 1 << 26;
+
+/// The largest map image file read (bytes); only regular files are read (not `/dev/zero`).
+pub const MAX_IMAGE_BYTES: u64 = 512 << 20;
+
+/// The bytes of the image file `path`: a regular file of at most [`MAX_IMAGE_BYTES`].
+fn read_image_file(path: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let err = |reason: String| Error::map_file(path, "file", reason);
+    let meta = std::fs::metadata(path).map_err(|e| err(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(err("not a regular file".into()));
+    }
+    if meta.len() > MAX_IMAGE_BYTES {
+        return Err(err(format!("{} bytes: larger than the {MAX_IMAGE_BYTES} bytes a map image may have", meta.len())));
+    }
+    // (read at most one byte past the limit: the file may grow while it is read)
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    std::fs::File::open(path).and_then(|f| f.take(MAX_IMAGE_BYTES + 1).read_to_end(&mut bytes)).map_err(|e| err(e.to_string()))?;
+    if bytes.len() as u64 > MAX_IMAGE_BYTES {
+        return Err(err(format!("larger than the {MAX_IMAGE_BYTES} bytes a map image may have")));
+    }
+    Ok(bytes)
+}
+
 /// Reads the image of `meta` and classifies its pixels into an occupancy grid.
 pub fn rasterize(meta: &RosMapMeta) -> Result<OccupancyGrid> {
-    let bytes = std::fs::read(&meta.image).map_err(|e| Error::map_file(&meta.image, "file", e.to_string()))?;
+    let bytes = read_image_file(&meta.image)?;
     let img = if bytes.starts_with(b"\x89PNG") {
         read_png(&bytes, &meta.image)?
     } else if bytes.starts_with(b"P5") || bytes.starts_with(b"P2") {
@@ -1027,6 +1058,49 @@ mod tests {
         let yaml = dir.0.join(format!("{name}.yaml"));
         std::fs::write(&yaml, format!("image: {name}.pgm\nresolution: {res}\norigin: [0.0, 0.0, 0.0]\n")).unwrap();
         yaml
+    }
+
+    /// CRC-32 of PNG chunks (ISO 3309), to forge headers.
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut c = !0u32;
+        for &b in bytes {
+            c ^= b as u32;
+            for _ in 0..8 {
+                c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+            }
+        }
+        !c
+    }
+
+    #[test]
+    fn a_huge_declared_image_or_a_device_is_refused_before_reading_it() {
+        let d = temp_dir("hostile");
+        // a 1 x 1 grey PNG whose header then claims 100000 x 100000 pixels (a 10 GB buffer)
+        let mut png_bytes = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut png_bytes, 1, 1);
+            enc.set_color(png::ColorType::Grayscale);
+            enc.set_depth(png::BitDepth::Eight);
+            enc.write_header().unwrap().write_image_data(&[254]).unwrap();
+        }
+        png_bytes[16..24].copy_from_slice(&[100_000u32.to_be_bytes(), 100_000u32.to_be_bytes()].concat());
+        let crc = crc32(&png_bytes[12..29]);
+        png_bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+        std::fs::write(d.0.join("huge.png"), &png_bytes).unwrap();
+        std::fs::write(d.0.join("huge.yaml"), "image: huge.png\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+        let e = load_ros_map(d.0.join("huge.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+        assert!(e.contains("huge.png") && e.contains("100000 x 100000") && e.contains("pixels a map image may have"), "{e}");
+        // the same in a PGM header
+        std::fs::write(d.0.join("huge.pgm"), b"P5\n100000 100000\n255\n\x00").unwrap();
+        std::fs::write(d.0.join("huge_pgm.yaml"), "image: huge.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+        let e = load_ros_map(d.0.join("huge_pgm.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+        assert!(e.contains("pixels a map image may have"), "{e}");
+        // an endless device is no image file
+        if std::path::Path::new("/dev/zero").exists() {
+            std::fs::write(d.0.join("zero.yaml"), "image: /dev/zero\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+            let e = load_ros_map(d.0.join("zero.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+            assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
+        }
     }
 
     fn start_cell(m: &RosMap) -> (usize, usize) {
