@@ -350,3 +350,31 @@ def test_ros_map_border_is_a_wall_and_a_framed_yard_is_outside(tmp_path):
     (tmp_path / "typo.yaml").write_text("image: yard.pgm\nresolution: 0.05\norigin: [0, 0, 0]\noccupied_tresh: 0.99\n")
     with pytest.raises(ValueError, match=r"typo\.yaml: line 4: unknown key `occupied_tresh`; the keys are image, resolution"):
         World(ros_map=str(tmp_path / "typo.yaml"))
+
+
+def test_views_read_while_another_thread_steps_raise_a_clear_error_not_a_panic():
+    import threading
+
+    world = World(preset="constricted_passage", seed=0)
+    stop = threading.Event()
+
+    def step():
+        while not stop.is_set():
+            world.step(0.3, 0.0, 0.2)
+
+    stepper = threading.Thread(target=step)
+    stepper.start()
+    refused = 0
+    try:
+        for _ in range(3000):
+            for name in ("ranges", "points", "true_pose", "estimated_pose", "sensor_pose", "contacts"):
+                try:
+                    getattr(world, name)
+                except RuntimeError as err:  # a PanicException is a BaseException and would escape
+                    assert "being stepped by another thread" in str(err)
+                    refused += 1
+    finally:
+        stop.set()
+        stepper.join()
+    assert refused > 0, "the stepping thread never held the world while it was read"
+    assert world.true_pose.shape == (3,)

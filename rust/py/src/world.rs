@@ -38,6 +38,12 @@ fn view<'py, T: Element, S: Data<Elem = T>, D: Dimension>(data: &ArrayBase<S, D>
     array
 }
 
+/// The world, borrowed to read a view: a world that another thread is stepping (its `step`
+/// releases the GIL) is a `RuntimeError` saying so, not a panic.
+fn borrowed<'py>(this: &Bound<'py, PyWorld>) -> PyResult<PyRef<'py, PyWorld>> {
+    this.try_borrow().map_err(|_| PyRuntimeError::new_err("this World is being stepped by another thread: read its views after `step` returns"))
+}
+
 /// The buffers behind the views: written after every step, shapes fixed at construction.
 struct Views {
     /// (channels, columns) ranges.
@@ -214,15 +220,15 @@ impl PyWorld {
     /// Latest ranges, shape (channels, columns), m; `inf` where there is no return. A live,
     /// read-only view (no copy): it follows the world as it steps; `.copy()` keeps a scan.
     #[getter]
-    fn ranges<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray2<f64>> {
-        view(&this.borrow().views.ranges, this)
+    fn ranges<'py>(this: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        Ok(view(&borrowed(this)?.views.ranges, this))
     }
 
     /// Latest body-frame points, shape (channels * columns, 3), m; NaN rows where there is no
     /// return. A live, read-only view like `ranges`.
     #[getter]
-    fn points<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray2<f64>> {
-        view(&this.borrow().views.points, this)
+    fn points<'py>(this: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        Ok(view(&borrowed(this)?.views.points, this))
     }
 
     /// Time (s) of the latest scan.
@@ -233,27 +239,27 @@ impl PyWorld {
 
     /// The sensor's true planar pose `[x, y, yaw]` when the latest scan was taken (live view).
     #[getter]
-    fn sensor_pose<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray1<f64>> {
-        view(&this.borrow().views.poses.row(2), this)
+    fn sensor_pose<'py>(this: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(view(&borrowed(this)?.views.poses.row(2), this))
     }
 
     /// The robot's true pose `[x, y, yaw]` (live view).
     #[getter]
-    fn true_pose<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray1<f64>> {
-        view(&this.borrow().views.poses.row(0), this)
+    fn true_pose<'py>(this: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(view(&borrowed(this)?.views.poses.row(0), this))
     }
 
     /// The odometry estimate `[x, y, yaw]` (live view).
     #[getter]
-    fn estimated_pose<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray1<f64>> {
-        view(&this.borrow().views.poses.row(1), this)
+    fn estimated_pose<'py>(this: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(view(&borrowed(this)?.views.poses.row(1), this))
     }
 
     /// Contacts after the last step: `[count, with_walls, with_obstacles, max_penetration]`
     /// (live view).
     #[getter]
-    fn contacts<'py>(this: &Bound<'py, Self>) -> Bound<'py, PyArray1<f64>> {
-        view(&this.borrow().views.contacts, this)
+    fn contacts<'py>(this: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(view(&borrowed(this)?.views.contacts, this))
     }
 
     /// Every wall now (static and moving obstacles), shape (M, 5): `ax, ay, bx, by, height`.
