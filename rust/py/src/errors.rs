@@ -120,3 +120,87 @@ pub fn vertical_fov_arg(obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
     let [lo, hi] = reals_arg::<2>("vertical_fov", obj, "(low, high) in rad")?;
     Ok((lo, hi))
 }
+
+/// A real number named `name`: bool, complex, strings and numbers no `f64` holds
+/// (`10**400`) are an `InvalidArgumentError` naming it and saying what was expected (`what`).
+pub fn real_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<f64> {
+    refuse_bool_complex(obj, name)?;
+    obj.extract::<f64>().map_err(|_| invalid(name, format!("expected {what} (a real number), got {}", repr(obj))))
+}
+
+/// [`real_arg`], or `None` for `None`.
+pub fn opt_real_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Option<f64>> {
+    if obj.is_none() {
+        return Ok(None);
+    }
+    real_arg(name, obj, what).map(Some)
+}
+
+/// Real numbers (a sequence or array), named `name` in the error.
+pub fn reals_vec_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    refuse_bool_complex(obj, name)?;
+    if obj.is_instance_of::<pyo3::types::PyString>() {
+        return Err(invalid(name, format!("expected {what} (real numbers), got {}", repr(obj))));
+    }
+    obj.extract::<Vec<f64>>().map_err(|_| invalid(name, format!("expected {what} (real numbers), got {}", repr(obj))))
+}
+
+/// Generates `fn $f(obj) -> PyResult<$t>` reading argument `$name` with `$helper` (for
+/// `#[pyo3(from_py_with = ...)]`, which takes a function of the object alone).
+macro_rules! named_arg {
+    ($f:ident, $t:ty, $helper:ident, $name:literal, $what:literal) => {
+        #[doc = concat!("Argument `", $name, "`: ", $what, ".")]
+        pub fn $f(obj: &Bound<'_, PyAny>) -> PyResult<$t> {
+            $helper($name, obj, $what)
+        }
+    };
+}
+
+fn opt_usize_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Option<usize>> {
+    if obj.is_none() {
+        return Ok(None);
+    }
+    usize_arg(name, obj, what).map(Some)
+}
+
+fn opt_reals_vec_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Option<Vec<f64>>> {
+    if obj.is_none() {
+        return Ok(None);
+    }
+    reals_vec_arg(name, obj, what).map(Some)
+}
+
+fn pair_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; 2]> {
+    reals_arg::<2>(name, obj, what)
+}
+
+fn opt_pair_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Option<(f64, f64)>> {
+    if obj.is_none() {
+        return Ok(None);
+    }
+    reals_arg::<2>(name, obj, what).map(|[a, b]| Some((a, b)))
+}
+
+/// The `Shield` keywords, each read with its own name in every error.
+pub mod shield_args {
+    use super::*;
+    named_arg!(semi_axes, Vec<f64>, reals_vec_arg, "semi_axes", "the ellipse's semi-axes in m");
+    named_arg!(gamma, f64, real_arg, "gamma", "the saturation γ");
+    named_arg!(kappa, f64, real_arg, "kappa", "the sharpness κ");
+    named_arg!(alpha, f64, real_arg, "alpha", "the class-K gain α");
+    named_arg!(crop_radius, Option<f64>, opt_real_arg, "crop_radius", "the crop radius in m, or None");
+    named_arg!(u_max, Option<Vec<f64>>, opt_reals_vec_arg, "u_max", "the speed box in m/s, or None");
+    named_arg!(safety_distance, f64, real_arg, "safety_distance", "the distance baseline's radius in m");
+    named_arg!(height_band, Option<(f64, f64)>, opt_pair_arg, "height_band", "(z_lo, z_hi) in m, or None");
+    named_arg!(voxel_size, Option<f64>, opt_real_arg, "voxel_size", "the voxel edge in m, or None");
+    named_arg!(angular_bins, Option<usize>, opt_usize_arg, "angular_bins", "a number of bins, or None");
+    named_arg!(grad_eps, f64, real_arg, "grad_eps", "the vanishing-gradient threshold");
+    named_arg!(tracker_tau, f64, real_arg, "tracker_tau", "the tracker's time constant in s");
+    named_arg!(a_max, [f64; 2], pair_arg, "a_max", "(ax, ay) in m/s²");
+    named_arg!(w_max, f64, real_arg, "w_max", "the yaw-rate limit in rad/s");
+    named_arg!(yaw_accel_max, f64, real_arg, "yaw_accel_max", "the yaw acceleration limit in rad/s²");
+    named_arg!(dt, f64, real_arg, "dt", "the control period in s");
+    named_arg!(brake_margin, f64, real_arg, "brake_margin", "the braking check's margin in m");
+    named_arg!(rotation_weight, f64, real_arg, "rotation_weight", "the weight of a turn against a speed");
+    named_arg!(yaw, Option<f64>, opt_real_arg, "yaw", "the heading in rad, or None");
+}

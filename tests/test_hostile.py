@@ -1,0 +1,48 @@
+"""Hostile input never crashes the process and every refusal names its argument (issue cases
+found by fuzzing): Shield keywords of the wrong type or out of range, views of a stepping world
+(test_world.py), map images that declare huge sizes or never end (Rust unit tests)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from shieldnav import Shield
+from shieldnav.exceptions import InvalidArgumentError
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"angular_bins": -1}, "angular_bins"),
+    ({"angular_bins": 2**64}, "angular_bins"),
+    ({"crop_radius": 10**400}, "crop_radius"),
+    ({"kappa": "8"}, "kappa"),
+    ({"gamma": True}, "gamma"),
+    ({"alpha": 1 + 2j}, "alpha"),
+    ({"semi_axes": (0.9 + 1j, 0.45)}, "semi_axes"),
+    ({"semi_axes": "ab"}, "semi_axes"),
+    ({"u_max": (True, 1.0)}, "u_max"),
+    ({"height_band": (0.1, 0.2, 0.3)}, "height_band"),
+    ({"voxel_size": [0.1]}, "voxel_size"),
+    ({"a_max": 2.0}, "a_max"),
+    ({"rotation_weight": None}, "rotation_weight"),
+])
+def test_shield_keywords_of_the_wrong_type_name_themselves(kwargs, name):
+    with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`"):
+        Shield(**kwargs)
+
+
+def test_a_yaw_no_float_holds_names_yaw():
+    with pytest.raises(InvalidArgumentError, match="invalid `yaw`"):
+        Shield().filter(np.array([[1.0, 0.5]]), np.array([1.0, 0.0]), yaw=10**400)
+
+
+@pytest.mark.parametrize("scan", [{"voxel_size": 1.0}, {"angular_bins": 16}])
+def test_a_point_at_1e155_m_is_down_sampled_without_a_panic(scan):
+    points, u_nom = np.array([[0.0, 1e155], [1.0, 0.0]]), np.array([1.0, 0.0])
+    outcomes = []
+    for shield in (Shield(crop_radius=None), Shield(crop_radius=None, **scan)):
+        try:
+            out = shield.filter(points, u_nom)
+            outcomes.append(("ok", tuple(out.u), out.num_points))
+        except InvalidArgumentError as err:  # a PanicException (a BaseException) would escape
+            outcomes.append(("error", str(err)))
+    assert outcomes[0] == outcomes[1]
