@@ -46,3 +46,12 @@ def test_a_point_at_1e155_m_is_down_sampled_without_a_panic(scan):
         except InvalidArgumentError as err:  # a PanicException (a BaseException) would escape
             outcomes.append(("error", str(err)))
     assert outcomes[0] == outcomes[1]
+
+
+@pytest.mark.parametrize("method", ["none", "composite", "braking", "hardmin", "distance"])
+def test_an_angular_velocity_no_robot_has_names_omega(method):
+    kwargs = {"velocity": [0.0, 0.0, 0.0]} if method == "braking" else {}
+    with pytest.raises(InvalidArgumentError, match="invalid `omega`"):
+        Shield(method=method).filter(np.array([[1.0, 0.5]]), np.array([1.0, 0.0]), omega=1e308, **kwargs)
+    out = Shield(method=method).filter(np.array([[1.0, 0.5]]), np.array([1.0, 0.0]), omega=1e4, **kwargs)
+    assert np.isfinite(out.dH_dt) and np.all(np.isfinite(out.u))

@@ -167,19 +167,32 @@ pub struct BodyState {
     velocity: Option<Vec3>,
 }
 
+/// The largest angular velocity (rad/s) and speed (m/s) a body state may give: far beyond any
+/// robot, small enough that `∂H/∂t` and the braking replay stay finite numbers.
+pub const MAX_BODY_RATE: f64 = 1.0e4;
+
+/// `values` finite and within `±MAX_BODY_RATE`, else an error naming `name`.
+fn body_rate(name: &'static str, values: &[f64]) -> Result<()> {
+    finite(name, values)?;
+    if values.iter().any(|v| v.abs() > MAX_BODY_RATE) {
+        return Err(Error::invalid(name, format!("must be within ±{MAX_BODY_RATE} (rad/s or m/s), got {values:?}")));
+    }
+    Ok(())
+}
+
 impl BodyState {
     /// A planar robot at heading `yaw` (rad) turning at `yaw_rate` (rad/s). For the braking
     /// shield `yaw_rate` is the nominal rotation command, which it filters.
     pub fn planar(yaw: f64, yaw_rate: f64) -> Result<Self> {
         finite("yaw", &[yaw])?;
-        finite("omega", &[yaw_rate])?;
+        body_rate("omega", &[yaw_rate])?;
         Ok(Self { rotation: rot_z(yaw), omega: [0.0, 0.0, yaw_rate], planar: true, velocity: None })
     }
 
     /// The same state with the body's measured velocity `(v_x, v_y, ω)` (body frame, m/s and
     /// rad/s): the tracker state the braking check starts from.
     pub fn with_velocity(self, velocity: Vec3) -> Result<Self> {
-        finite("velocity", &velocity)?;
+        body_rate("velocity", &velocity)?;
         Ok(Self { velocity: Some(velocity), ..self })
     }
 
@@ -191,7 +204,7 @@ impl BodyState {
     /// A robot with body-to-world rotation `rotation` and body-frame angular velocity `omega`.
     pub fn spatial(rotation: Mat3, omega: Vec3) -> Result<Self> {
         finite("rotation", rotation.as_flattened())?;
-        finite("omega", &omega)?;
+        body_rate("omega", &omega)?;
         let err = orthonormality_error(&rotation);
         if err > ROTATION_TOLERANCE || det(&rotation) < 0.0 {
             return Err(Error::invalid("rotation", format!("not a proper rotation matrix (|RᵀR − I| = {err:.2e}, det = {:.3})", det(&rotation))));
