@@ -55,3 +55,13 @@ def test_an_angular_velocity_no_robot_has_names_omega(method):
         Shield(method=method).filter(np.array([[1.0, 0.5]]), np.array([1.0, 0.0]), omega=1e308, **kwargs)
     out = Shield(method=method).filter(np.array([[1.0, 0.5]]), np.array([1.0, 0.0]), omega=1e4, **kwargs)
     assert np.isfinite(out.dH_dt) and np.all(np.isfinite(out.u))
+
+
+def test_feasible_on_the_clarabel_path_means_the_row_and_the_box_hold():
+    # a nominal command of 2e16 m/s: Clarabel stops 6e-4 short of the row
+    out = Shield().filter(np.array([[0.0, -0.6]]), np.array([2.2e16, -6.4]), extra_A=np.zeros((0, 2)), extra_b=np.zeros(0))
+    b = -2.0 * out.H - out.dH_dt
+    assert not out.feasible or float(np.dot(out.grad_p[:2], out.u)) >= b - 1e-9 * max(abs(b), 1.0)
+    # a box of 1e-300 m/s on x: the command stays in it
+    out = Shield(method="distance", u_max=(1e-300, 1.0)).filter(np.array([[0.5, 0.1], [1.0, -0.3]]), np.array([1.0, 0.2]))
+    assert abs(out.u[0]) <= 1e-300 and abs(out.u[1]) <= 1.0

@@ -189,8 +189,17 @@ pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>
     let (status, x) = run(&p, &q, &a, &b)?;
     let mut u = [0.0; super::qp::MAX_VARS];
     if solved(status) {
-        u[..d].copy_from_slice(&x[..d]);
-        return Ok(QpSolution { u, active: true, feasible: true });
+        // Clarabel's answer, held to the box exactly and called feasible only if it meets every
+        // row to the tolerance the closed-form filter uses (at extreme magnitudes an interior
+        // point solver can stop short of a row)
+        for j in 0..d {
+            u[j] = u_max.map_or(x[j], |m| x[j].clamp(-m[j], m[j]));
+        }
+        let meets = (0..rows.len()).all(|k| {
+            let (row, c) = rows.row(k);
+            row.iter().zip(&u[..d]).map(|(a, v)| a * v).sum::<f64>() >= c - super::qp::ROW_TOLERANCE * c.abs().max(1.0)
+        });
+        return Ok(QpSolution { u, active: true, feasible: meets });
     }
     if !matches!(status, SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible) {
         return Err(Error::Solver(format!("Clarabel stopped with {status:?}")));
@@ -218,6 +227,8 @@ pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>
     }
     let (status, x2) = run(&p, &q, &build(&relaxed, d, u_max, &[]), &rhs(&relaxed, u_max))?;
     let src = if solved(status) { &x2 } else { &x };
-    u[..d].copy_from_slice(&src[..d]);
+    for j in 0..d {
+        u[j] = u_max.map_or(src[j], |m| src[j].clamp(-m[j], m[j]));
+    }
     Ok(QpSolution { u, active: true, feasible: false })
 }

@@ -173,7 +173,7 @@ fn meets_row(g: &[f64], u: &[f64], b: f64) -> bool {
 
 /// How far (relative) a solution may fall short of its row and still be called feasible:
 /// far above the rounding of a command of ordinary size (about 1e-16), far below any margin.
-const ROW_TOLERANCE: f64 = 1e-9;
+pub(crate) const ROW_TOLERANCE: f64 = 1e-9;
 
 #[cfg(test)]
 mod tests {
