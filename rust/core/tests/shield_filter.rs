@@ -437,8 +437,8 @@ fn braking_inputs_name_the_argument() {
 }
 
 /// A point so far away that its `h` overflows to infinity is down-sampled like any other: the
-/// voxel or bin keeps it, and the shield answers as it does without down-sampling (the cell
-/// used to stay empty and the filter indexed past the scan).
+/// voxel or bin keeps it (an empty cell would index past the scan), and the shield answers as
+/// it does without down-sampling.
 #[test]
 fn a_point_whose_h_overflows_is_kept_by_its_cell() {
     let pts = [0.0, 1e155, 1.0, 0.0];
