@@ -65,3 +65,14 @@ def test_feasible_on_the_clarabel_path_means_the_row_and_the_box_hold():
     # a box of 1e-300 m/s on x: the command stays in it
     out = Shield(method="distance", u_max=(1e-300, 1.0)).filter(np.array([[0.5, 0.1], [1.0, -0.3]]), np.array([1.0, 0.2]))
     assert abs(out.u[0]) <= 1e-300 and abs(out.u[1]) <= 1.0
+
+
+def test_a_map_of_open_floor_is_refused_as_a_map_file_error(tmp_path):
+    from shieldnav import World
+    from shieldnav.exceptions import MapFileError
+
+    w, h = 600, 400
+    (tmp_path / "free.pgm").write_bytes(f"P5\n{w} {h}\n255\n".encode() + bytes([254]) * (w * h))
+    (tmp_path / "free.yaml").write_text("image: free.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
+    with pytest.raises(MapFileError, match="no free region inside the building"):
+        World(ros_map=str(tmp_path / "free.yaml"))

@@ -919,6 +919,37 @@ fn enclosure_in(grid: &OccupancyGrid, [i0, i1, j0, j1]: [usize; 4], i: usize, j:
     hits as Real / ENCLOSURE_RAYS as Real
 }
 
+/// Whether cell `(i, j)` passes the [`enclosure`] test (`enclosure_in(..) >= ENCLOSURE`), its
+/// rays cast until too many have escaped to pass: a map of open floor refuses each candidate
+/// after a few rays rather than all of them.
+fn enclosed_in(grid: &OccupancyGrid, [i0, i1, j0, j1]: [usize; 4], i: usize, j: usize) -> bool {
+    // the most rays that may escape: the largest `e` with (RAYS − e) / RAYS ≥ ENCLOSURE
+    let Some(allowed) = (0..=ENCLOSURE_RAYS).rev().find(|&e| (ENCLOSURE_RAYS - e) as Real / ENCLOSURE_RAYS as Real >= ENCLOSURE) else {
+        return false;
+    };
+    let (x0, x1, y0, y1) = (i0 as Real, (i1 + 1) as Real, j0 as Real, (j1 + 1) as Real);
+    let mut escaped = 0;
+    for k in 0..ENCLOSURE_RAYS {
+        let (s, c) = (k as Real * std::f64::consts::TAU / ENCLOSURE_RAYS as Real).sin_cos();
+        let (mut x, mut y) = (i as Real + 0.5, j as Real + 0.5);
+        loop {
+            x += 0.5 * c;
+            y += 0.5 * s;
+            if x < x0 || y < y0 || x >= x1 || y >= y1 {
+                escaped += 1;
+                if escaped > allowed {
+                    return false;
+                }
+                break;
+            }
+            if grid.get(x as usize, y as usize) != Cell::Free {
+                break;
+            }
+        }
+    }
+    true
+}
+
 /// The start cell: in the largest free 4-connected region that does not reach the edge of the
 /// [`known_area`] (the image's border or the unknown frame around the map), the cell of
 /// greatest clearance, if that is at least [`START_CLEARANCE`] and it passes the [`enclosure`]
@@ -975,7 +1006,7 @@ fn interior_start(grid: &OccupancyGrid) -> Option<(Pose2, Real)> {
         }
     }
     regions.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
-    let enclosed = |c: usize| enclosure_in(grid, area, c % w, c / w) >= ENCLOSURE;
+    let enclosed = |c: usize| enclosed_in(grid, area, c % w, c / w);
     let chosen = regions.iter().map(|r| r.1).find(|&c| enclosed(c)).or_else(|| {
         let mut lattice: Vec<usize> = (0..h).step_by(10).flat_map(|j| (0..w).step_by(10).map(move |i| j * w + i)).filter(|&c| grid.cells[c] == Cell::Free && clearance[c] >= START_CLEARANCE).collect();
         lattice.sort_by(|a, b| clearance[*b].total_cmp(&clearance[*a]).then(a.cmp(b)));
@@ -1070,6 +1101,27 @@ mod tests {
             }
         }
         !c
+    }
+
+    #[test]
+    fn the_enclosure_test_stops_early_with_the_same_verdict() {
+        // a room with a door, open floor around: cells inside, in the door and outside
+        let mut g = OccupancyGrid::new(120, 100, 0.05, Pose2::new(0.0, 0.0, 0.0), Cell::Free).unwrap();
+        for i in 30..90 {
+            for j in [30, 70] {
+                g.set(i, j, Cell::Occupied);
+            }
+        }
+        for j in 30..71 {
+            g.set(30, j, Cell::Occupied);
+            if !(45..55).contains(&j) {
+                g.set(89, j, Cell::Occupied);
+            }
+        }
+        let area = [0, 119, 0, 99];
+        for (i, j) in [(60, 50), (35, 35), (85, 50), (95, 50), (5, 5), (60, 80), (88, 50)] {
+            assert_eq!(enclosed_in(&g, area, i, j), enclosure_in(&g, area, i, j) >= ENCLOSURE, "cell ({i}, {j})");
+        }
     }
 
     #[test]
