@@ -898,35 +898,13 @@ pub fn enclosure(grid: &OccupancyGrid, i: usize, j: usize) -> Real {
 }
 
 /// [`enclosure`] with the known area given.
-fn enclosure_in(grid: &OccupancyGrid, [i0, i1, j0, j1]: [usize; 4], i: usize, j: usize) -> Real {
-    let (x0, x1, y0, y1) = (i0 as Real, (i1 + 1) as Real, j0 as Real, (j1 + 1) as Real);
-    let mut hits = 0;
-    for k in 0..ENCLOSURE_RAYS {
-        let (s, c) = (k as Real * std::f64::consts::TAU / ENCLOSURE_RAYS as Real).sin_cos();
-        let (mut x, mut y) = (i as Real + 0.5, j as Real + 0.5);
-        loop {
-            x += 0.5 * c;
-            y += 0.5 * s;
-            if x < x0 || y < y0 || x >= x1 || y >= y1 {
-                break;
-            }
-            if grid.get(x as usize, y as usize) != Cell::Free {
-                hits += 1;
-                break;
-            }
-        }
-    }
-    hits as Real / ENCLOSURE_RAYS as Real
+fn enclosure_in(grid: &OccupancyGrid, area: [usize; 4], i: usize, j: usize) -> Real {
+    (ENCLOSURE_RAYS - escaped_rays(grid, area, i, j, ENCLOSURE_RAYS)) as Real / ENCLOSURE_RAYS as Real
 }
 
-/// Whether cell `(i, j)` passes the [`enclosure`] test (`enclosure_in(..) >= ENCLOSURE`), its
-/// rays cast until too many have escaped to pass: a map of open floor refuses each candidate
-/// after a few rays rather than all of them.
-fn enclosed_in(grid: &OccupancyGrid, [i0, i1, j0, j1]: [usize; 4], i: usize, j: usize) -> bool {
-    // the most rays that may escape: the largest `e` with (RAYS − e) / RAYS ≥ ENCLOSURE
-    let Some(allowed) = (0..=ENCLOSURE_RAYS).rev().find(|&e| (ENCLOSURE_RAYS - e) as Real / ENCLOSURE_RAYS as Real >= ENCLOSURE) else {
-        return false;
-    };
+/// How many of the [`ENCLOSURE_RAYS`] rays from cell `(i, j)` leave the known area `area`
+/// without ending on a non-free cell, counted until more than `limit` have.
+fn escaped_rays(grid: &OccupancyGrid, [i0, i1, j0, j1]: [usize; 4], i: usize, j: usize, limit: usize) -> usize {
     let (x0, x1, y0, y1) = (i0 as Real, (i1 + 1) as Real, j0 as Real, (j1 + 1) as Real);
     let mut escaped = 0;
     for k in 0..ENCLOSURE_RAYS {
@@ -937,17 +915,25 @@ fn enclosed_in(grid: &OccupancyGrid, [i0, i1, j0, j1]: [usize; 4], i: usize, j: 
             y += 0.5 * s;
             if x < x0 || y < y0 || x >= x1 || y >= y1 {
                 escaped += 1;
-                if escaped > allowed {
-                    return false;
-                }
                 break;
             }
             if grid.get(x as usize, y as usize) != Cell::Free {
                 break;
             }
         }
+        if escaped > limit {
+            break;
+        }
     }
-    true
+    escaped
+}
+
+/// Whether cell `(i, j)` passes the [`enclosure`] test (`enclosure_in(..) >= ENCLOSURE`), its
+/// rays cast until too many have escaped to pass: a map of open floor refuses each candidate
+/// after a few rays rather than all of them.
+fn enclosed_in(grid: &OccupancyGrid, area: [usize; 4], i: usize, j: usize) -> bool {
+    // the most rays that may escape: the largest `e` with (RAYS − e) / RAYS ≥ ENCLOSURE
+    (0..=ENCLOSURE_RAYS).rev().find(|&e| (ENCLOSURE_RAYS - e) as Real / ENCLOSURE_RAYS as Real >= ENCLOSURE).is_some_and(|allowed| escaped_rays(grid, area, i, j, allowed) <= allowed)
 }
 
 /// The start cell: in the largest free 4-connected region that does not reach the edge of the
