@@ -195,7 +195,7 @@ impl World {
     fn build(scenario: Scenario, config: WorldConfig, mesh: Option<Arc<ScanMesh>>) -> Result<Self> {
         scenario.validate()?;
         config.robot.validate()?;
-        scenario.check_start(&config.robot)?;
+        crate::robot::check_start(&config.robot, &scenario)?;
         if !(config.dt.is_finite() && config.dt > 0.0 && config.dt <= 0.1) {
             return Err(Error::invalid("dt", format!("must be in (0, 0.1] s, got {}", config.dt)));
         }

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::world::{Point2, Pose2, Segment};
+use crate::world::{Point2, Pose2, Scenario, Segment};
 
 /// The body outline: a `length × width` rectangle (m, length along the heading) whose corners
 /// are rounded with `corner_radius` (m; 0 for sharp corners). Default: Spot, 1.1 × 0.5 m.
@@ -140,6 +140,34 @@ pub(crate) fn inner_rect_signed_distance(shape: &RobotShape, q: &[Point2]) -> Re
         }
     }
     d2.sqrt()
+}
+
+/// That the robot's footprint `shape` at the `scenario`'s start is in free space: it crosses or
+/// touches no wall (of the map or of an obstacle where it is at time 0) and stands inside
+/// no polygon or obstacle (whose walls it would then not touch). The error names `start`.
+pub fn check_start(shape: &RobotShape, scenario: &Scenario) -> Result<()> {
+    let p = scenario.start;
+    let reach = shape.half_diagonal();
+    let at = |what: String| Error::invalid("start", format!("the robot's footprint ({} × {} m) at ({}, {}, yaw {}) {what}", shape.length, shape.width, p.x, p.y, p.yaw));
+    let mut moving = Vec::new();
+    for o in &scenario.obstacles {
+        o.segments_at(0.0, &mut moving);
+    }
+    for w in scenario.map.segments.iter().chain(&moving) {
+        if w.distance_to_point([p.x, p.y]) <= reach && footprint_segment_distance(shape, p, w) <= 0.0 {
+            return Err(at(format!("crosses or touches the wall {:?} → {:?}", w.a, w.b)));
+        }
+    }
+    if let Some(i) = scenario.map.polygons.iter().position(|q| q.contains([p.x, p.y])) {
+        return Err(at(format!("stands inside polygons[{i}]")));
+    }
+    for o in &scenario.obstacles {
+        let pose = o.trajectory.pose_at(0.0);
+        if o.shape.contains(pose.inverse_transform_point([p.x, p.y])) {
+            return Err(at(format!("stands inside the obstacle `{}` (at time 0)", o.name)));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -7,6 +7,6 @@ pub mod footprint;
 pub mod physics;
 pub mod tracker;
 
-pub use footprint::{footprint_segment_distance, RobotShape};
-pub use physics::{ContactReport, PhysicsScene};
+pub use footprint::{check_start, footprint_segment_distance, RobotShape};
+pub use physics::{ContactReport, PhysicsScene, PhysicsStats};
 pub use tracker::{Tracker, TrackerConfig, TrackerOutcome};

@@ -4,15 +4,10 @@
 //! nominal controllers see, with drift and scheduled faults (the paper's Scenario 2).
 
 pub mod lidar;
-mod lidar_indexed;
-mod lidar_mesh;
 pub mod noise;
 pub mod odometry;
 mod ray_segment;
-mod simd;
 
-pub use lidar::{Lidar, LidarConfig, LidarMount, Scan};
-pub use lidar_indexed::IndexedScanStats;
-pub use lidar_mesh::{MeshScanStats, NoMesh, ScanMesh};
+pub use lidar::{IndexedScanStats, Lidar, LidarConfig, LidarMount, MeshScanStats, NoMesh, Scan, ScanMesh};
 pub use odometry::{Odometry, OdometryConfig, OdometryFault};
 pub use ray_segment::ray_segment_distance;

@@ -71,11 +71,11 @@ pub struct CompositeParams {
 impl CompositeParams {
     /// Checks every field as [`super::Shield::new`] does; the error names the field.
     pub fn validate(&self) -> Result<()> {
-        super::check_gamma_kappa(self.gamma, self.kappa)?;
+        check_gamma_kappa(self.gamma, self.kappa)?;
         if !self.omega.iter().all(|v| v.is_finite()) {
             return Err(Error::invalid("omega", format!("must be finite, got {:?}", self.omega)));
         }
-        super::ScanFilter { crop_radius: self.crop_radius, height_band: self.height_band, voxel_size: None, angular_bins: None }.validate()
+        super::scan::ScanFilter { crop_radius: self.crop_radius, height_band: self.height_band, voxel_size: None, angular_bins: None }.validate()
     }
 }
 
@@ -456,4 +456,28 @@ pub(crate) fn composite_of_valid<T: Lane>(pts: &[T], stride: usize, motion: Opti
     let grad_omega = [2.0 * inv_s * (a[1] - a[2]) * sums.cyz, 2.0 * inv_s * (a[2] - a[0]) * sums.cxz, 2.0 * inv_s * (a[0] - a[1]) * sums.cxy];
     let dh_dt = w[0] * grad_omega[0] + w[1] * grad_omega[1] + w[2] * grad_omega[2];
     Ok(CompositeBarrier { value, h_min, grad_body, dh_dt, grad_omega, num_points: n })
+}
+
+/// Largest soft-min sharpness `κ`: beyond it the weights' products overflow (κ = 1e100 gave a
+/// NaN command), and the soft-min equals the hard min to every digit long before.
+pub const MAX_KAPPA: f64 = 1e6;
+/// Least `κ`: the soft-min's offset `(γ/κ) ln N` grows as `1/κ` (κ = 1e-300 asked for
+/// commands of 1e300 m/s).
+pub const MIN_KAPPA: f64 = 1e-3;
+/// Largest saturation `γ` (m² of `h`): beyond, `γ tanh(h/γ)` is `h` to every digit.
+pub const MAX_GAMMA: f64 = 1e6;
+/// Least saturation `γ`: below about 1.6e-308 the kernel's `2 log₂e / γ` is infinite (a point
+/// on the ellipse gave a NaN command); long before, `tanh(h/γ)` is the sign of `h`.
+pub const MIN_GAMMA: f64 = 1e-6;
+
+/// `γ` and `κ` within their bounds ([`MIN_GAMMA`] to [`MAX_GAMMA`], [`MIN_KAPPA`] to
+/// [`MAX_KAPPA`]): the one check of [`super::Shield::new`] and [`CompositeParams::validate`].
+pub(crate) fn check_gamma_kappa(gamma: f64, kappa: f64) -> Result<()> {
+    if !(MIN_GAMMA..=MAX_GAMMA).contains(&gamma) {
+        return Err(Error::invalid("gamma", format!("must be from {MIN_GAMMA:e} to {MAX_GAMMA:e} (below, tanh(h/γ) is the sign of h; above, γ tanh(h/γ) is h itself), got {gamma:e}")));
+    }
+    if !(MIN_KAPPA..=MAX_KAPPA).contains(&kappa) {
+        return Err(Error::invalid("kappa", format!("must be from {MIN_KAPPA:e} to {MAX_KAPPA:e} (beyond, the soft-min is the hard min to every digit), got {kappa:e}")));
+    }
+    Ok(())
 }

@@ -4,7 +4,7 @@
 //! Bits past the row's last cell are always 0, and cells off either end of a row read as 0
 //! (blocked), so an erosion never reaches outside the grid.
 
-use super::grid::Cell;
+use super::cell::Cell;
 
 /// Number of words holding `cells` bits.
 #[inline]

@@ -4,21 +4,10 @@
 //! (along its y); its lower-left corner is `origin ∘ (i·res, j·res)`.
 
 use super::bitrow::{extract_runs, pack_cells, words_for};
+pub use super::cell::Cell;
 use super::geometry::{Point2, Pose2, Segment};
 use crate::error::{Error, Result};
 use crate::math::Real;
-
-/// The state of one grid cell.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(u8)]
-pub enum Cell {
-    /// Known free space.
-    Free = 0,
-    /// Known obstacle.
-    Occupied = 1,
-    /// Never observed.
-    Unknown = 2,
-}
 
 /// A rectangular occupancy grid placed in the world by `origin` (m, rad).
 #[derive(Debug, Clone, PartialEq)]

@@ -5,6 +5,7 @@
 //! LIDAR). Polygons (furniture, pillars) are stored as their edges.
 
 pub(crate) mod bitrow;
+mod cell;
 mod contour;
 mod cspace;
 pub mod generate;
@@ -13,6 +14,7 @@ pub mod grid;
 pub(crate) mod index;
 mod map;
 mod moving;
+mod odometry;
 pub mod preset;
 pub(crate) mod recycle;
 pub(crate) mod region;
@@ -26,6 +28,7 @@ pub use grid::{Cell, OccupancyGrid};
 pub use index::SegmentIndex;
 pub use map::StaticMap;
 pub use moving::{MovingObstacle, Trajectory, TIME_LIMIT};
+pub use odometry::{OdometryConfig, OdometryFault};
 pub use preset::{preset, PRESET_NAMES};
 pub use rosmap::{load_ros_map, RosMap, RosMapOptions};
 pub use scenario::{Scenario, COORDINATE_LIMIT, YAW_LIMIT};

@@ -22,10 +22,10 @@ use std::f64::consts::FRAC_PI_2;
 use super::geometry::{Polygon, Pose2};
 use super::map::StaticMap;
 use super::moving::{MovingObstacle, Trajectory};
+use super::odometry::{OdometryConfig, OdometryFault};
 use super::scenario::Scenario;
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::sensors::{OdometryConfig, OdometryFault};
 
 /// The preset names [`preset`] accepts.
 pub const PRESET_NAMES: [&str; 3] = ["constricted_passage", "odometry_jump", "dynamic_obstacles"];

@@ -29,10 +29,9 @@ use serde::{Deserialize, Serialize};
 use super::geometry::{Polygon, Pose2, Segment};
 use super::map::StaticMap;
 use super::moving::{MovingObstacle, Trajectory, TIME_LIMIT};
+use super::odometry::{OdometryConfig, OdometryFault};
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::robot::{footprint_segment_distance, RobotShape};
-use crate::sensors::{OdometryConfig, OdometryFault};
 
 /// How far from the origin (m) everything of a scenario may lie: walls, start, goal,
 /// obstacles' shapes and key poses, odometry jumps (the physics runs in `f32`).
@@ -160,34 +159,6 @@ impl Scenario {
                     time(start, "odometry.faults")?;
                     time(end, "odometry.faults")?;
                 }
-            }
-        }
-        Ok(())
-    }
-
-    /// That the robot's footprint `shape` at the start is in free space: it crosses or
-    /// touches no wall (of the map or of an obstacle where it is at time 0) and stands inside
-    /// no polygon or obstacle (whose walls it would then not touch). The error names `start`.
-    pub fn check_start(&self, shape: &RobotShape) -> Result<()> {
-        let p = self.start;
-        let reach = shape.half_diagonal();
-        let at = |what: String| Error::invalid("start", format!("the robot's footprint ({} × {} m) at ({}, {}, yaw {}) {what}", shape.length, shape.width, p.x, p.y, p.yaw));
-        let mut moving = Vec::new();
-        for o in &self.obstacles {
-            o.segments_at(0.0, &mut moving);
-        }
-        for w in self.map.segments.iter().chain(&moving) {
-            if w.distance_to_point([p.x, p.y]) <= reach && footprint_segment_distance(shape, p, w) <= 0.0 {
-                return Err(at(format!("crosses or touches the wall {:?} → {:?}", w.a, w.b)));
-            }
-        }
-        if let Some(i) = self.map.polygons.iter().position(|q| q.contains([p.x, p.y])) {
-            return Err(at(format!("stands inside polygons[{i}]")));
-        }
-        for o in &self.obstacles {
-            let pose = o.trajectory.pose_at(0.0);
-            if o.shape.contains(pose.inverse_transform_point([p.x, p.y])) {
-                return Err(at(format!("stands inside the obstacle `{}` (at time 0)", o.name)));
             }
         }
         Ok(())

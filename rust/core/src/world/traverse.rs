@@ -25,10 +25,10 @@
 //! single configurations reaches) but runs on whole rows (see `cspace.rs`): 0.2–0.3 ms on a
 //! 1280 × 880 site grid where the search over single configurations took 60–200 ms.
 
+#[cfg(doc)]
+use super::cell::Cell;
 use super::cspace::{self, Cover, Space, ORIENTATIONS};
 use super::geometry::{Point2, Pose2};
-#[cfg(doc)]
-use super::grid::Cell;
 use super::grid::OccupancyGrid;
 use crate::error::{Error, Result};
 use crate::math::Real;

@@ -10,11 +10,9 @@
 //! walls (culling only skips walls that cannot be seen), bit for bit but where a beam meets
 //! two walls at a corner and the two scans round differently which is first.
 
-use rand::Rng;
-
-use super::lidar::{max, min, none_beyond, seg_origin_distance, Lidar, Scan};
-use super::lidar_mesh::ScanMesh;
-use crate::error::Result;
+use super::beams::Beams;
+use super::config::Scan;
+use super::numeric::{max, min, none_beyond, seg_origin_distance};
 use crate::math::Real;
 use crate::simd::SimdLevel;
 use crate::world::index::{is_behind, Piece, PieceLanes, CLASSES, LANES, SECTORS};
@@ -22,14 +20,14 @@ use crate::world::{cross2, Pose2, Segment, SegmentIndex};
 
 /// Reusable buffers of the indexed scan.
 #[derive(Debug, Clone, Default)]
-pub(super) struct IndexedScratch {
+pub(crate) struct IndexedScratch {
     /// Bucket offsets `(di, dj)` sorted by a lower bound of their distance, for `key`.
     offsets: Vec<(i32, i32)>,
     key: (u64, u64, i32),
     /// Per piece of a group (or of a small bucket), computed at once (see [`Lidar::piece_beams`]).
     beams: BeamLanes,
     /// What the last scan did.
-    stats: IndexedScanStats,
+    pub(crate) stats: IndexedScanStats,
 }
 
 /// What [`Lidar::piece_beams`] finds for each of a run of pieces: its beams (first column and
@@ -174,7 +172,7 @@ impl SensorFrame {
     }
 }
 
-impl Lidar {
+impl Beams {
     /// Whether the walls in the box `[x0, y0, x1, y1]` (not empty, at `dmin` from the sensor
     /// `f`) are hidden: for a planar scan seen from outside the box, every beam through it
     /// already hits something no farther than the box.
@@ -325,7 +323,7 @@ impl Lidar {
 
     /// Sweeps `extra` (moving obstacles, few) from the sensor pose `sp`, each wall whole.
     #[inline]
-    pub(super) fn sweep_extra(&self, extra: &[Segment], sp: Pose2, ranges: &mut [Real]) {
+    pub(crate) fn sweep_extra(&self, extra: &[Segment], sp: Pose2, ranges: &mut [Real]) {
         let c = self.config;
         let f = SensorFrame::new(sp);
         let zs = c.mount.z;
@@ -338,55 +336,25 @@ impl Lidar {
         }
     }
 
-    /// Scans the walls of `index` plus `extra` as [`Lidar::scan_indexed_into`] does, a planar
-    /// scan by walking `mesh` (a [`ScanMesh`] of the same walls) where it can: the same ranges.
-    #[allow(clippy::too_many_arguments)]
-    pub fn scan_mesh_into<R: Rng + ?Sized>(&mut self, mesh: &ScanMesh, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
-        let sp = self.begin_scan(body, stamp, out)?;
-        if self.sweep_mesh(mesh, sp, out) {
-            self.sweep_extra(extra, sp, &mut out.ranges);
-        } else {
-            self.sweep_index_any(index, extra, sp, out);
-            self.sweep_tops(&[index.segments(), extra], sp, &mut out.ranges);
-        }
-        self.finish(rng, out);
-        Ok(())
-    }
-
     /// [`Lidar::sweep_index`] with the vector instructions of this CPU.
-    fn sweep_index_any(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
+    pub(crate) fn sweep_index_any(&self, sc: &mut IndexedScratch, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         match self.simd {
             // SAFETY: `simd` is found from the CPU: it runs these instructions.
             #[cfg(target_arch = "x86_64")]
-            SimdLevel::Avx512 => unsafe { self.sweep_index_avx512(index, extra, sp, out) },
+            SimdLevel::Avx512 => unsafe { self.sweep_index_avx512(sc, index, extra, sp, out) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
-            SimdLevel::Avx2 => unsafe { self.sweep_index_avx2(index, extra, sp, out) },
-            _ => self.sweep_index::<4>(index, extra, sp, out),
+            SimdLevel::Avx2 => unsafe { self.sweep_index_avx2(sc, index, extra, sp, out) },
+            _ => self.sweep_index::<4>(sc, index, extra, sp, out),
         }
-    }
-
-    /// What the last [`Lidar::scan_indexed_into`] did (buckets visited and culled, walls swept).
-    pub fn last_indexed_stats(&self) -> IndexedScanStats {
-        self.indexed.stats
-    }
-
-    /// Scans the walls of `index` plus `extra` (moving obstacles, few) from a robot at `body`.
-    /// Ranges are identical to [`Lidar::scan_into`] over the same walls.
-    pub fn scan_indexed_into<R: Rng + ?Sized>(&mut self, index: &SegmentIndex, extra: &[Segment], body: Pose2, stamp: Real, rng: &mut R, out: &mut Scan) -> Result<()> {
-        let sp = self.begin_scan(body, stamp, out)?;
-        self.sweep_index_any(index, extra, sp, out);
-        self.sweep_tops(&[index.segments(), extra], sp, &mut out.ranges);
-        self.finish(rng, out);
-        Ok(())
     }
 
     /// [`Lidar::sweep_index`] built for AVX2 and FMA (same ranges: no fused multiply-add is
     /// asked for, so none is used).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    pub(super) fn sweep_index_avx2(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
-        self.sweep_index::<4>(index, extra, sp, out);
+    pub(crate) fn sweep_index_avx2(&self, sc: &mut IndexedScratch, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
+        self.sweep_index::<4>(sc, index, extra, sp, out);
     }
 
     /// [`Lidar::sweep_index`] built for AVX-512 (same ranges): twice the vector registers,
@@ -394,17 +362,17 @@ impl Lidar {
     /// pieces at once (four with AVX2, whose sixteen registers eight would overflow).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,avx512f,avx512vl,avx512dq")]
-    pub(super) fn sweep_index_avx512(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
-        self.sweep_index::<8>(index, extra, sp, out);
+    pub(crate) fn sweep_index_avx512(&self, sc: &mut IndexedScratch, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
+        self.sweep_index::<8>(sc, index, extra, sp, out);
     }
 
     /// The ranges of [`Lidar::scan_indexed_into`] before limits and noise, the pieces' beams
     /// computed `L` pieces at once (at most [`LANES`]).
     #[inline(always)]
-    pub(super) fn sweep_index<const L: usize>(&mut self, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
+    pub(crate) fn sweep_index<const L: usize>(&self, sc: &mut IndexedScratch, index: &SegmentIndex, extra: &[Segment], sp: Pose2, out: &mut Scan) {
         let c = self.config;
         let f = SensorFrame::new(sp);
-        let mut scratch = std::mem::take(&mut self.indexed);
+        let scratch = sc;
         self.sweep_extra(extra, sp, &mut out.ranges);
         let cell = index.cell();
         let (nx, ny) = index.dims();
@@ -512,14 +480,13 @@ impl Lidar {
         }
         scratch.beams = beams;
         scratch.stats = stats;
-        self.indexed = scratch;
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::SeedableRng;
+    use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
     /// The silhouette as selects gives the branches' corners from every side of a box: the

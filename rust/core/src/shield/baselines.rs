@@ -1,0 +1,71 @@
+//! The paper's baselines: hard-min (the nearest point's ellipsoidal CBF) and distance (one
+//! spherical CBF row per point).
+
+use super::conic::{solve_rows, LinearConstraints};
+use super::filter::Shield;
+use super::filter::{to_world, Filtered};
+use super::input::{BodyState, Scan};
+use super::qp::{QpSolution, MAX_VARS};
+use crate::error::Result;
+
+impl Shield {
+    /// The hard-min baseline: the nearest point's ellipsoidal CBF only.
+    pub(super) fn hard_min_row(&mut self, scan: &Scan, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<Filtered> {
+        let (dim, r) = (self.dim(), state.rotation);
+        let alpha = self.config.alpha;
+        let u_max = self.config.u_max.clone();
+        let env = self.envelope;
+        let pts = self.selected_f64(scan);
+        let n = pts.len() / dim;
+        let nearest = (0..n)
+            .map(|i| {
+                let p = &pts[i * dim..(i + 1) * dim];
+                [p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]
+            })
+            .map(|p| (env.h_body(&p), p))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        match nearest {
+            None => {
+                let sol = self.solve_row(u_nom, &[0.0; 3], f64::NEG_INFINITY, u_max.as_deref(), extra)?;
+                Ok(Filtered { value: f64::MAX, h_min: f64::MAX, grad_p: [0.0; 3], dh_dt: 0.0, num_points: 0, sol, omega: state.omega, braked: false, recovering: false, sweep_h: f64::NAN })
+            }
+            Some((h, p)) => {
+                let g = to_world(&r, dim, &env.grad_body(&p));
+                let dt = env.dh_dt_body(&p, &state.omega);
+                let sol = self.solve_row(u_nom, &g, -alpha * h - dt, u_max.as_deref(), extra)?;
+                Ok(Filtered { value: h, h_min: h, grad_p: g, dh_dt: dt, num_points: n, sol, omega: state.omega, braked: false, recovering: false, sweep_h: f64::NAN })
+            }
+        }
+    }
+
+    /// The distance baseline: one spherical row `‖p_i‖² − s_d² ≥ 0` per point, all in one
+    /// Clarabel QP.
+    pub(super) fn distance_row(&mut self, scan: &Scan, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<Filtered> {
+        let (dim, r) = (self.dim(), state.rotation);
+        let alpha = self.config.alpha;
+        let u_max = self.config.u_max.clone();
+        let pts = self.selected_f64(scan).to_vec();
+        let n = pts.len() / dim;
+        let sd2 = self.config.safety_distance * self.config.safety_distance;
+        self.rows.clear();
+        let (mut h_min, mut g_near, mut stuck) = (f64::MAX, [0.0; 3], false);
+        for i in 0..n {
+            let p = &pts[i * dim..(i + 1) * dim];
+            let d = to_world(&r, dim, &[p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]);
+            let h = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - sd2;
+            let g = [-2.0 * d[0], -2.0 * d[1], -2.0 * d[2]];
+            self.rows.push(&g[..dim], -alpha * h)?;
+            // a violated row no direction helps (a point at the robot's centre)
+            stuck |= -alpha * h > 0.0 && (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt() <= self.config.grad_eps;
+            if h < h_min {
+                (h_min, g_near) = (h, g);
+            }
+        }
+        if let Some(e) = extra {
+            self.rows.extend(e)?;
+        }
+        // stop, as the composite does with a vanishing gradient (see `qp`)
+        let sol = if stuck { QpSolution { u: [0.0; MAX_VARS], active: true, feasible: false } } else { solve_rows(u_nom, &self.rows, u_max.as_deref())? };
+        Ok(Filtered { value: h_min, h_min, grad_p: g_near, dh_dt: 0.0, num_points: n, sol, omega: state.omega, braked: false, recovering: false, sweep_h: f64::NAN })
+    }
+}
