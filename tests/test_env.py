@@ -372,3 +372,19 @@ def test_reset_info_coverage_timing_totals_and_keyword_checks():
     for name in ("map_path", "scenario_path"):
         with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`: expected a file path"):
             shieldnav.CorridorInspectionEnv(**{name: 123})
+
+
+def test_the_episode_applies_its_time_limit_once():
+    # the id registers its time limit as the episode's `time_limit`, with no TimeLimit wrapper on top
+    for env_id, (_, steps) in ENV_IDS.items():
+        assert gym.spec(env_id).max_episode_steps is None and gym.spec(env_id).kwargs["time_limit"] == steps, env_id
+    env = gym.make("shieldnav/ConstrictedPassage-v0", time_limit=5)
+    wrapper = env
+    while isinstance(wrapper, gym.Wrapper):
+        assert not isinstance(wrapper, gym.wrappers.TimeLimit)
+        wrapper = wrapper.env
+    env.reset(seed=0)
+    ends = [env.step(np.zeros(3, np.float32)) for _ in range(5)]
+    assert [truncated for _, _, _, truncated, _ in ends] == [False] * 4 + [True]
+    assert "shieldnav_episode" in ends[-1][4] and "shieldnav_episode" not in ends[-2][4]
+    env.close()

@@ -78,7 +78,7 @@ def test_vector_info_holds_the_single_envs_keys_and_values():
 
 
 def test_time_limit_shortens_vector_episodes_as_it_does_single_ones():
-    # make_vec passes the id's max_episode_steps too: the smaller limit ends the episodes
+    # either limit ends the episodes (the id registers its time_limit, no max_episode_steps)
     for kwargs in ({"time_limit": 7}, {"max_episode_steps": 7}):
         v = gym.make_vec(ENV, num_envs=2, vectorization_mode="vector_entry_point", **kwargs)
         v.reset(seed=0)

@@ -114,10 +114,10 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
     step of an episode also ``shieldnav_episode``: collisions, contact time, deadlock,
     coverage, path length, time, mean intervention, shield statistics (``episode`` is left to
     Gymnasium's ``RecordEpisodeStatistics`` and SB3's ``Monitor``, which write their own). It
-    comes with the episode's own ends: its ``time_limit`` (the registered
-    ``max_episode_steps``), the goal, a deadlock; to shorten episodes pass ``time_limit=N``
-    (``gym.make(..., max_episode_steps=N)`` adds a ``TimeLimit`` wrapper the environment
-    cannot see). ``env.unwrapped.episode.summary()`` gives the totals at any step.
+    comes with the episode's own ends: its ``time_limit`` (the id's registered steps, applied
+    by the episode itself: no ``TimeLimit`` wrapper is registered), the goal, a deadlock; to
+    shorten episodes pass ``time_limit=N`` (``gym.make(..., max_episode_steps=N)`` adds a
+    ``TimeLimit`` wrapper the environment cannot see). ``env.unwrapped.episode.summary()`` gives the totals at any step.
 
     ## Arguments
     ``preset`` / ``procedural`` / ``map_path`` / ``scenario_path``: the site (exactly one).

@@ -6,7 +6,7 @@ from shieldnav.maps import DEFAULT_MAP
 
 _ENTRY = "shieldnav.env:CorridorInspectionEnv"
 
-#: id → (keyword arguments, max_episode_steps at the default 50 Hz).
+#: id → (keyword arguments, time limit in steps at the default 50 Hz).
 ENV_IDS: dict[str, tuple[dict[str, object], int]] = {
     # a new procedural office site every reset
     "shieldnav/CorridorInspection-v0": ({"procedural": True}, 3000),
@@ -26,11 +26,11 @@ def register_envs() -> None:
     """Registers every id of `ENV_IDS` (once)."""
     for env_id, (kwargs, steps) in ENV_IDS.items():
         if env_id not in registry:
-            # the episode knows its time limit too, so that its last step carries the summary
+            # the episode applies its time limit itself (its last step carries the summary), so no
+            # TimeLimit wrapper is registered; gym.make(..., max_episode_steps=N) still adds one
             register(
                 id=env_id,
                 entry_point=_ENTRY,
                 vector_entry_point="shieldnav.vector:make_vector",
                 kwargs={**kwargs, "time_limit": steps},
-                max_episode_steps=steps,
             )

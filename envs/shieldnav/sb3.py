@@ -32,8 +32,8 @@ class ShieldnavVecEnv(VecEnv):
     """``ShieldnavVecEnv("shieldnav/CorridorInspection-v0", num_envs=8, shield="composite")``.
 
     Keywords are those of the registered id (its registration kwargs are the defaults) plus
-    ``threads``; episodes end at the smaller of the id's ``max_episode_steps`` and
-    ``time_limit`` (either one shortens them, as for the vector environment).
+    ``threads``; episodes end at the id's ``time_limit``, or at the smaller of it and
+    ``max_episode_steps`` when that is given (as for the vector environment).
     """
 
     def __init__(self, env_id: str, num_envs: int = 1, threads: int | None = None, **kwargs: Any) -> None:
@@ -43,7 +43,6 @@ class ShieldnavVecEnv(VecEnv):
         if "autoreset_mode" in kwargs:
             raise InvalidArgumentError("invalid `autoreset_mode`: ShieldnavVecEnv resets as SB3's VecEnvs do (same step)")
         merged = {**spec.kwargs, **kwargs}
-        merged.setdefault("max_episode_steps", spec.max_episode_steps)
         self.vec = CorridorInspectionVectorEnv(num_envs, autoreset_mode="same_step", threads=threads, **merged)
         super().__init__(num_envs, self.vec.single_observation_space, self.vec.single_action_space)
         self.env_id = env_id

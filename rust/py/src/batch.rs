@@ -51,19 +51,20 @@ impl PyBatch {
     ) -> PyResult<Self> {
         let args = SiteArgs { preset, procedural, ros_map, scenario };
         args.check()?;
-        args.check_keys(kwargs)?;
+        let kw = crate::config::values(kwargs)?;
+        args.check_keys(&kw)?;
         if num_envs == 0 {
             return Err(invalid("num_envs", "must be at least 1"));
         }
         let seeds = seeds_vec(seeds, num_envs, "seeds")?;
         let mode = AutoReset::parse(autoreset_mode).map_err(to_py)?;
-        let (config, opts) = episode_config(kwargs)?;
+        let (config, opts) = episode_config(&kw)?;
         let inner = py
             .detach(move || {
                 let site = args.load(&opts)?;
                 Batch::new(site, config, &seeds, mode, threads)
             })
-            .map_err(|e| crate::config::keyed(e, kwargs))?;
+            .map_err(|e| crate::config::keyed(e, &kw))?;
         Ok(Self { outcomes: vec![SlotOutcome::default(); num_envs], inner })
     }
 

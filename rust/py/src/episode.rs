@@ -116,14 +116,15 @@ impl PyEpisode {
     ) -> PyResult<Self> {
         let args = SiteArgs { preset, procedural, ros_map, scenario };
         args.check()?;
-        args.check_keys(kwargs)?;
-        let (config, opts) = episode_config(kwargs)?;
+        let kw = crate::config::values(kwargs)?;
+        args.check_keys(&kw)?;
+        let (config, opts) = episode_config(&kw)?;
         let inner = py
             .detach(move || {
                 let site = args.load(&opts)?;
                 Episode::new(site, config, seed)
             })
-            .map_err(|e| crate::config::keyed(e, kwargs))?;
+            .map_err(|e| crate::config::keyed(e, &kw))?;
         Ok(Self { inner })
     }
 

@@ -423,7 +423,7 @@ mod tests {
     fn errors_name_the_keyword_a_user_types() {
         let err = |k: &str, v: Value| episode_config(&[(k.to_string(), v)]).unwrap_err().to_string();
         assert!(err("robot_length", Value::Float(-1.0)).contains("robot_length"));
-        assert!(err("yaw_accel_max", Value::Float(f64::NAN)).contains("yaw_accel_max"));
+        assert!(err("lidar_dropout", Value::Float(1.0)).contains("lidar_dropout"));
         assert!(err("gamma", Value::Bool(true)).contains("gamma") && err("gamma", Value::Bool(true)).contains("a bool"));
         assert!(err("lidar_columns", Value::Float(1024.0)).contains("expected an integer"));
         assert!(err("no_such_key", Value::None).contains("unknown keyword argument `no_such_key`"));

@@ -24,6 +24,7 @@ mod batch;
 mod coverage;
 mod deadlock;
 mod episode;
+pub mod keywords;
 mod observation;
 mod pool;
 
