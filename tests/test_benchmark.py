@@ -15,6 +15,7 @@ import pytest
 from agents import benchmark
 
 
+@pytest.mark.expensive
 def test_benchmark_json_holds_the_papers_outcomes(tmp_path):
     rows = benchmark.main([
         "--scenarios", "shieldnav/ConstrictedPassage-v0", "shieldnav/OdometryJump-v0", "shieldnav/DynamicObstacles-v0",
@@ -220,6 +221,7 @@ def test_interrupted_run_keeps_finished_episodes(monkeypatch):
     assert len(results) == 1 and results[0]["task"]["shield"] == "composite"
 
 
+@pytest.mark.expensive
 def test_ray_backend_gives_the_local_numbers(tmp_path, monkeypatch):
     import shutil
     import tempfile

@@ -1,4 +1,4 @@
-"""Every Python block of the README runs as written (a user copies them)."""
+"""The README's Python blocks run as written (a user copies them), and the functions it links are defined where it says."""
 
 from __future__ import annotations
 
@@ -30,3 +30,12 @@ def test_readme_block_runs(k):
     if "vec" in namespace:
         assert namespace["obs"].shape[0] == 64
         namespace["vec"].close()
+
+
+def test_every_function_the_readme_links_is_defined_in_the_linked_file():
+    root = Path(__file__).resolve().parent.parent
+    links = re.findall(r"\[`([A-Za-z_:]+)`\]\(([^)#]+\.rs)\)", (root / "README.md").read_text())
+    assert len(links) >= 8
+    for name, path in links:
+        source = (root / path).read_text()
+        assert re.search(rf"\bfn {name.split('::')[-1]}\b", source), f"README links {name} to {path}, which does not define it"

@@ -28,6 +28,7 @@ CP = "shieldnav/ConstrictedPassage-v0"
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.expensive
 def test_ppo_trains_saves_reloads_and_is_benchmarked_identically_twice(tmp_path):
     rows = []
     for run in ("a", "b"):
@@ -139,6 +140,7 @@ def test_train_names_a_count_below_one(name, tmp_path):
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.expensive
 def test_a_model_is_benchmarked_on_two_workers(tmp_path):
     """Loading the model imports torch in the benchmark's process: workers forked from it hung
     for ever in torch's thread pools. A hang fails the test at the timeout."""
