@@ -163,9 +163,12 @@ def test_bad_inputs_are_invalid_argument_errors_naming_the_argument(make, name):
         make()
 
 
-def test_bool_keys_still_take_bools():
-    ep = Episode(preset=PRESET, terminate_on_contact=False, stop_when_infeasible=True)
-    ep.step(np.zeros(3))
+def test_bool_keys_take_bools_and_only_bools():
+    for flag in (False, True, np.bool_(True)):
+        Episode(preset=PRESET, terminate_on_contact=flag, stop_when_infeasible=flag).step(np.zeros(3))
+    for number in (0, 1, 1.0):
+        with pytest.raises(InvalidArgumentError, match="`terminate_on_contact`: expected True or False"):
+            Episode(preset=PRESET, terminate_on_contact=number)
 
 
 # --- 2. a 3D scan looks down on solid furniture ---

@@ -71,7 +71,7 @@ fn value_of(key: &str, v: &Bound<'_, PyAny>) -> PyResult<Value> {
         return Ok(Value::None);
     }
     let type_name = v.get_type().name().map(|n| n.to_string()).unwrap_or_default();
-    if v.is_instance_of::<PyBool>() || type_name == "bool_" {
+    if v.is_instance_of::<PyBool>() || type_name == "bool_" || type_name == "bool" {
         return Ok(Value::Bool(v.is_truthy()?));
     }
     if v.is_instance_of::<PyString>() {
