@@ -8,6 +8,7 @@ mod batch;
 mod config;
 mod episode;
 mod errors;
+mod outcome;
 mod planner;
 mod shield;
 mod world;
