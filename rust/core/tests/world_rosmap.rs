@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use image::ImageEncoder;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use shieldnav_core::sensors::{ray_segment_distance, Lidar, LidarConfig, Scan};
@@ -307,11 +308,7 @@ fn rgba_png_uses_luminance_alpha_and_negate() {
     let d = temp_dir("png");
     // 4 x 1 RGBA: black, white, transparent white, pure red (luminance 76 -> p = 0.70)
     let px: [u8; 16] = [0, 0, 0, 255, 255, 255, 255, 255, 255, 255, 255, 0, 255, 0, 0, 255];
-    let file = std::fs::File::create(d.join("m.png")).unwrap();
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), 4, 1);
-    enc.set_color(png::ColorType::Rgba);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.write_header().unwrap().write_image_data(&px).unwrap();
+    image::save_buffer(d.join("m.png"), &px, 4, 1, image::ExtendedColorType::Rgba8).unwrap();
     for (negate, want) in [(0, [Cell::Occupied, Cell::Free, Cell::Unknown, Cell::Occupied]), (1, [Cell::Free, Cell::Occupied, Cell::Unknown, Cell::Unknown])] {
         std::fs::write(d.join("m.yaml"), format!("image: m.png\nresolution: 0.5\norigin: [1.0, 2.0, 0.0]\nnegate: {negate}\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")).unwrap();
         // no interior start in a 4 x 1 image: the error says so, naming the file
@@ -336,6 +333,22 @@ fn malformed_files_name_file_and_field() {
     std::fs::write(d.join("c.yaml"), "image: t.pgm\nresolution: -1\norigin: [0, 0, 0]\n").unwrap();
     let e = load_ros_map(d.join("c.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
     assert!(e.contains("c.yaml: field resolution"), "{e}");
+    // a PGM that ends after its header: the image file and its header are named
+    std::fs::write(d.join("short.pgm"), b"P5\n80 60\n255").unwrap();
+    std::fs::write(d.join("short.yaml"), "image: short.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("short.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("short.pgm: header: ends after maxval"), "{e}");
+    // a file that is no image of a known format, and a PNG cut short
+    std::fs::write(d.join("text.pgm"), b"hello").unwrap();
+    std::fs::write(d.join("text.yaml"), "image: text.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("text.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("text.pgm: header: not a PGM (P5/P2), PNG, BMP, JPEG or PPM/PBM image"), "{e}");
+    image::save_buffer(d.join("cut.png"), &[254u8; 64], 8, 8, image::ExtendedColorType::L8).unwrap();
+    let bytes = std::fs::read(d.join("cut.png")).unwrap();
+    std::fs::write(d.join("cut.png"), &bytes[..bytes.len() - 20]).unwrap();
+    std::fs::write(d.join("cut.yaml"), "image: cut.png\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("cut.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("cut.png: PNG data: "), "{e}");
     let e = load_ros_map(d.join("nope.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
     assert!(e.contains("nope.yaml: file"), "{e}");
     // a map beyond the coordinates a scenario may use names its file and the field that put it there
@@ -413,4 +426,87 @@ fn indexed_scan_equals_the_full_scan_on_real_maps() {
     // some groups of pieces behind nearer walls were skipped whole; beams along the grid's
     // lines were cast again
     assert!(maps == 0 || groups_occluded > 0 && recast > 0, "{groups_occluded} groups skipped, {recast} beams recast");
+}
+
+/// The pixels of a 40 × 30 room (free inside a one-cell occupied border), row 0 at the top.
+fn room_pixels() -> Vec<u8> {
+    room_pgm()[b"P5\n40 30\n255\n".len()..].to_vec()
+}
+
+/// The room in every format map_server reads: PGM, PNG (grey, RGB, 16-bit grey), BMP, JPEG and
+/// PPM give the same grid and start; colour through its luminance.
+#[test]
+fn bmp_jpeg_png_and_ppm_maps_load_as_the_pgm_does() {
+    use image::ExtendedColorType as C;
+    let d = temp_dir("formats");
+    let grey = room_pixels();
+    let rgb: Vec<u8> = grey.iter().flat_map(|&v| [v, v, v]).collect();
+    let grey16: Vec<u8> = grey.iter().flat_map(|&v| (v as u16 * 257).to_be_bytes()).collect();
+    std::fs::write(d.join("room.pgm"), room_pgm()).unwrap();
+    image::save_buffer(d.join("room.png"), &grey, 40, 30, C::L8).unwrap();
+    image::save_buffer(d.join("room_rgb.png"), &rgb, 40, 30, C::Rgb8).unwrap();
+    image::save_buffer(d.join("room16.png"), &grey16, 40, 30, C::L16).unwrap();
+    image::save_buffer(d.join("room.bmp"), &rgb, 40, 30, C::Rgb8).unwrap();
+    image::save_buffer(d.join("room.ppm"), &rgb, 40, 30, C::Rgb8).unwrap();
+    // JPEG is lossy: quality 100 keeps 0 and 254 within the thresholds' margins
+    let mut jpeg = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 100).encode(&grey, 40, 30, C::L8).unwrap();
+    std::fs::write(d.join("room.jpg"), jpeg).unwrap();
+    let load = |image: &str| {
+        std::fs::write(d.join("m.yaml"), format!("image: {image}\nresolution: 0.1\norigin: [0, 0, 0]\n")).unwrap();
+        load_ros_map(d.join("m.yaml"), &RosMapOptions::default()).unwrap_or_else(|e| panic!("{image}: {e}"))
+    };
+    let want = load("room.pgm");
+    assert_eq!(want.grid.cells.iter().filter(|&&c| c == Cell::Free).count(), 38 * 28);
+    for image in ["room.png", "room_rgb.png", "room16.png", "room.bmp", "room.jpg", "room.ppm"] {
+        let m = load(image);
+        assert_eq!(m.grid.cells, want.grid.cells, "{image}");
+        assert_eq!(m.scenario.start, want.scenario.start, "{image}");
+        assert_eq!(m.scenario.map.segments, want.scenario.map.segments, "{image}");
+    }
+}
+
+/// CRC-32 of PNG chunks (ISO 3309), to forge headers.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+        }
+    }
+    !c
+}
+
+#[test]
+fn a_huge_declared_image_or_a_device_is_refused_before_reading_it() {
+    let d = temp_dir("hostile");
+    // a 1 x 1 grey PNG whose header then claims 100000 x 100000 pixels (a 10 GB buffer)
+    let mut png_bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png_bytes).write_image(&[254], 1, 1, image::ExtendedColorType::L8).unwrap();
+    png_bytes[16..24].copy_from_slice(&[100_000u32.to_be_bytes(), 100_000u32.to_be_bytes()].concat());
+    let crc = crc32(&png_bytes[12..29]);
+    png_bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+    std::fs::write(d.join("huge.png"), &png_bytes).unwrap();
+    std::fs::write(d.join("huge.yaml"), "image: huge.png\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("huge.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("huge.png") && e.contains("100000 x 100000") && e.contains("pixels a map image may have"), "{e}");
+    // the same in a PGM header, and in a BMP's
+    std::fs::write(d.join("huge.pgm"), b"P5\n100000 100000\n255\n\x00").unwrap();
+    std::fs::write(d.join("huge_pgm.yaml"), "image: huge.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("huge_pgm.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("pixels a map image may have"), "{e}");
+    let mut bmp = Vec::new();
+    image::codecs::bmp::BmpEncoder::new(&mut bmp).encode(&[254, 254, 254], 1, 1, image::ExtendedColorType::Rgb8).unwrap();
+    bmp[18..26].copy_from_slice(&[50_000i32.to_le_bytes(), 50_000i32.to_le_bytes()].concat());
+    std::fs::write(d.join("huge.bmp"), &bmp).unwrap();
+    std::fs::write(d.join("huge_bmp.yaml"), "image: huge.bmp\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("huge_bmp.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("huge.bmp"), "{e}");
+    // an endless device is no image file
+    if std::path::Path::new("/dev/zero").exists() {
+        std::fs::write(d.join("zero.yaml"), "image: /dev/zero\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+        let e = load_ros_map(d.join("zero.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+        assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
+    }
 }
