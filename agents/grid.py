@@ -35,6 +35,7 @@ import json
 import multiprocessing
 import os
 import shutil
+import signal
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -259,6 +260,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     except (OSError, yaml.YAMLError, GridError) as err:
         ap.error(str(err))
     out = Path(args.out or Path("results/grid") / Path(args.config).stem)
+    # Ctrl-C also when started in the background (which ignores it), and `kill` stop as Ctrl-C does
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     if args.list:
         for r in runs(config, out):
             print(f"{'done' if finished(r) else 'todo'}  {r['env']:<12} {r['method']:<18} seed {r['seed']}  {r['n_timesteps']} steps  {r['folder']}")
