@@ -53,7 +53,7 @@ def scripted_coverage(env_id: str, episode_steps: int | None, seeds: int, cache:
         kwargs = {} if episode_steps is None else {"max_episode_steps": episode_steps, "time_limit": episode_steps}
         rows = [run_episode({"env_id": env_id, "shield": "braking", "seed": s, "policy": "scripted", "kwargs": kwargs})["summary"] for s in range(seeds)]
         cov = [float(r["coverage"]) for r in rows]
-        known[key] = {"coverage": float(np.mean(cov)), "std": float(np.std(cov)), "per_seed": cov, "contact_steps": [int(r.get("collisions", 0)) for r in rows]}
+        known[key] = {"coverage": float(np.mean(cov)), "std": float(np.std(cov)), "per_seed": cov, "collisions": [int(r.get("collisions", 0)) for r in rows]}
         cache.write_text(json.dumps(known, indent=1))
     return known[key]
 

@@ -226,3 +226,12 @@ def test_ppo_lagrangian_drops_the_multiplier_to_zero_and_keeps_it_there_under_bu
 def test_ppo_lagrangian_refuses_a_negative_budget():
     with pytest.raises(ValueError, match="cost_limit ≥ 0"):
         PPOLagrangian("MlpPolicy", DummyVecEnv([lambda: CostlyEnv(1.0)]), cost_limit=-1.0)
+
+
+@pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[1] / "experiments").glob("*.yml")), ids=lambda p: p.name)
+def test_every_shipped_experiment_file_loads_and_names_its_runs(path, tmp_path):
+    config = grid.load(path)
+    todo = grid.runs(config, tmp_path)
+    assert len(todo) == len(config["seeds"]) * len(config["envs"]) * len(config["methods"])
+    assert len({r["folder"] for r in todo}) == len(todo)
+    assert all(r["n_timesteps"] >= 1 and r["algo"] in config["algos"] for r in todo)
