@@ -36,9 +36,11 @@ def load_runs(grid: Path) -> dict[str, dict[str, list[dict[str, Any]]]]:
         meta = json.loads(path.read_text())
         env, method = meta.get("grid", {}).get("env", path.parts[-4]), meta.get("grid", {}).get("method", path.parts[-3])
         out.setdefault(env, {}).setdefault(method, []).append(meta)
-    for methods in out.values():
+    order = list(COLOURS)
+    for env, methods in out.items():
         for runs in methods.values():
             runs.sort(key=lambda m: m["seed"])
+        out[env] = dict(sorted(methods.items(), key=lambda kv: (order.index(kv[0]) if kv[0] in order else len(order), kv[0])))
     return out
 
 
