@@ -1,4 +1,5 @@
-"""Train PPO or SAC (stable-baselines3) on the corridor environments, with the shield in the
+"""Train PPO, SAC or PPO-Lagrangian (``--algo ppo_lagrangian``, `agents.lagrangian`; stable-baselines3)
+on the corridor environments, with the shield in the
 loop (the policy's command is filtered during training; ``--shield braking``, the default) or
 without (``--shield none``).
 
