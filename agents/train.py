@@ -1,4 +1,5 @@
-"""Train PPO or SAC (stable-baselines3) on the corridor environments, with the shield in the
+"""Train PPO, SAC or PPO-Lagrangian (``--algo ppo_lagrangian``, `agents.lagrangian`; stable-baselines3)
+on the corridor environments, with the shield in the
 loop (the policy's command is filtered during training; ``--shield braking``, the default) or
 without (``--shield none``).
 
@@ -19,6 +20,8 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
+import time
 from pathlib import Path
 from typing import Any
 
@@ -40,8 +43,15 @@ from shieldnav.registration import ENV_IDS
 from shieldnav.sb3 import ShieldnavVecEnv
 
 from agents import benchmark
+from agents.lagrangian import PPOLagrangian
 
-ALGOS = {"ppo": PPO, "sac": SAC}
+ALGOS = {"ppo": PPO, "sac": SAC, "ppo_lagrangian": PPOLagrangian}
+#: Hyperparameters each algorithm gets unless the caller (an experiment file) says otherwise.
+DEFAULT_HYPERPARAMS: dict[str, dict[str, Any]] = {
+    "ppo": {"n_steps": 256, "batch_size": 256},
+    "ppo_lagrangian": {"n_steps": 256, "batch_size": 256, "cost_limit": 10.0},
+    "sac": {"learning_starts": 1000},
+}
 #: Seeds SB3 accepts are below this (it seeds NumPy's global generator).
 SEED_END = 2**32
 
@@ -109,18 +119,23 @@ class TrainingSafety(BaseCallback):
     """Safety over every training step, not only evaluation: contact steps (the sum of
     ``info["cost"]``), episodes with contact, shield interventions (steps where the shield
     changed the command), infeasible, braked and recovering steps. Logged as ``train_safety/*``
-    and kept in ``totals``."""
+    and kept in ``totals``. Every training episode that ends is kept in ``episodes``: the step
+    count at its end, its return (the environment's, as ``VecMonitor`` records it), length,
+    coverage, contact steps, and the contact steps of the whole run so far — the learning curves."""
 
     def __init__(self) -> None:
         super().__init__()
         self.totals = {k: 0 for k in ("steps", "contact_steps", "episodes", "episodes_with_contact", "interventions",
                                        "infeasible_steps", "braked_steps", "recovering_steps")}
+        self.episodes: list[dict[str, float]] = []
         self._touched: np.ndarray | None = None
+        self._contacts: np.ndarray | None = None
 
     def _on_step(self) -> bool:
         infos, dones = self.locals["infos"], self.locals["dones"]
-        if self._touched is None:
+        if self._touched is None or self._contacts is None:
             self._touched = np.zeros(len(infos), dtype=bool)
+            self._contacts = np.zeros(len(infos), dtype=np.int64)
         t = self.totals
         for i, info in enumerate(infos):
             cost = info.get("cost", 0.0) > 0.0
@@ -131,10 +146,16 @@ class TrainingSafety(BaseCallback):
             t["braked_steps"] += int(info.get("shield_braked", False))
             t["recovering_steps"] += int(info.get("shield_recovering", False))
             self._touched[i] |= cost
+            self._contacts[i] += int(cost)
             if dones[i]:
                 t["episodes"] += 1
                 t["episodes_with_contact"] += int(self._touched[i])
+                monitor, summary = info.get("episode", {}), info.get("shieldnav_episode", {})
+                self.episodes.append({"timesteps": self.num_timesteps, "return": float(monitor.get("r", np.nan)), "length": int(monitor.get("l", 0)),
+                                      "coverage": float(summary.get("coverage", np.nan)), "contact_steps": int(self._contacts[i]),
+                                      "run_contact_steps": t["contact_steps"]})
                 self._touched[i] = False
+                self._contacts[i] = 0
         for k, v in t.items():
             self.logger.record(f"train_safety/{k}", v)
         return True
@@ -142,9 +163,14 @@ class TrainingSafety(BaseCallback):
 
 def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, seed: int, out: Path,
           eval_every: int = 10_000, eval_episodes: int = 3, tensorboard: bool = True, progress: bool = True,
-          max_episode_steps: int | None = None, **env_kwargs: Any) -> Path:
-    """Trains and saves ``out/model.zip``; returns its path. Every argument is checked, and
-    the environments built, before ``out`` is created."""
+          max_episode_steps: int | None = None, hyperparams: dict[str, Any] | None = None, policy: str = "MlpPolicy",
+          threads: int | None = None, **env_kwargs: Any) -> Path:
+    """Trains and saves ``out/model.zip``; returns its path. ``hyperparams`` go to the algorithm's
+    constructor over `DEFAULT_HYPERPARAMS` (rl-zoo3's per-algorithm keys). Every argument is
+    checked, and the environments built, before ``out`` is created. ``out/run.json`` (the run's
+    settings, safety totals, training episodes, evaluations, wall time and env steps/s) is
+    written last, whole or not at all: its presence means the run finished. ``threads``: the
+    native batch's worker threads (default: the usable cores)."""
     if algo not in ALGOS:
         raise InvalidArgumentError(f"invalid `algo`: expected one of {sorted(ALGOS)}, got {algo!r}")
     if env_id not in ENV_IDS:
@@ -170,7 +196,7 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
     kwargs = {"shield": shield, **env_kwargs}
     if max_episode_steps is not None:
         kwargs["max_episode_steps"] = max_episode_steps
-    venv = VecCheckNan(VecMonitor(ShieldnavVecEnv(env_id, num_envs=num_envs, **kwargs)), raise_exception=True)
+    venv = VecCheckNan(VecMonitor(ShieldnavVecEnv(env_id, num_envs=num_envs, threads=threads, **kwargs)), raise_exception=True)
     venv.seed(seed)
     out.mkdir(parents=True, exist_ok=True)
     tb = None
@@ -182,23 +208,38 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
         except ImportError:
             print("tensorboard not installed: no TensorBoard logs (pip install tensorboard)")
     Algo = ALGOS[algo]
-    params: dict[str, Any] = {"n_steps": 256, "batch_size": 256} if algo == "ppo" else {"learning_starts": 1000}
-    model = Algo("MlpPolicy", venv, seed=seed, device="cpu", tensorboard_log=tb, verbose=0, **params)
+    params: dict[str, Any] = {**DEFAULT_HYPERPARAMS[algo], **(hyperparams or {})}
+    if algo == "ppo_lagrangian":
+        params.setdefault("episode_steps", max_episode_steps or ENV_IDS[env_id][1])
+    model = Algo(policy, venv, seed=seed, device="cpu", tensorboard_log=tb, verbose=0, **params)
     if tb is None:
         # SB3 would otherwise log to a new folder under the system's temp folder on every run
         model.set_logger(configure_logger(str(out), ["csv"]))
     evaluator = EvalSafety(env_id, eval_every, eval_episodes, seed + 10_000, eval_kwargs)
     checkpoints = CheckpointCallback(save_freq=max(eval_every // num_envs, 1), save_path=str(out / "checkpoints"), name_prefix=algo)
     safety = TrainingSafety()
+    start = time.perf_counter()
     model.learn(timesteps, callback=CallbackList([safety, evaluator, checkpoints]), progress_bar=progress, tb_log_name=f"{algo}_{shield}")
+    wall = time.perf_counter() - start
     model.logger.close()  # flushes and closes the log files
     path = out / "model.zip"
     model.save(path)
     meta = {"algo": algo, "env_id": env_id, "shield": shield, "timesteps": timesteps, "num_envs": num_envs, "seed": seed,
-            "training_safety": safety.totals, "eval": evaluator.history, "env_kwargs": env_kwargs}
-    (out / "run.json").write_text(json.dumps(meta, indent=1))
+            "policy": policy, "hyperparams": {k: v for k, v in params.items()}, "env_kwargs": env_kwargs,
+            "max_episode_steps": max_episode_steps, "training_safety": safety.totals, "eval": evaluator.history,
+            "episodes": safety.episodes, "wall_time_s": wall, "steps_per_s": model.num_timesteps / wall}
+    if isinstance(model, PPOLagrangian):
+        meta["lagrangian"] = [{"timesteps": t, "episode_cost": c, "lambda": lam} for t, c, lam in model.multiplier_history]
+    write_json_atomically(out / "run.json", meta)
     venv.close()
     return path
+
+
+def write_json_atomically(path: Path, data: Any) -> None:
+    """Writes ``path`` whole or not at all (a temporary file in the same folder, then a rename)."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(data, indent=1, default=float))
+    os.replace(tmp, path)
 
 
 def main(argv: list[str] | None = None) -> Path:
