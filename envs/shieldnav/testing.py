@@ -22,7 +22,9 @@ violation of each failing episode; with ``gif_dir`` they re-run the first failin
 
 from __future__ import annotations
 
+import atexit
 import concurrent.futures
+import concurrent.futures.process
 import copy
 import math
 import multiprocessing
@@ -35,7 +37,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
-from shieldnav.exceptions import InvalidArgumentError
+from shieldnav.exceptions import InvalidArgumentError, ShieldnavError
 
 #: The policy names ``run_episodes`` resolves itself.
 POLICY_NAMES = ("scripted", "ppo")
@@ -247,7 +249,9 @@ def run_episodes(
 
     ``workers``: processes to run on (default: the CPUs available, at most one per episode; 1
     runs in this process). A policy that cannot be pickled (a lambda, a closure) runs in this
-    process when ``workers`` is not given, and is an error with ``workers > 1``.
+    process when ``workers`` is not given, and is an error with ``workers > 1``. The worker
+    processes are spawned (they import the main module: guard a script's code with
+    ``if __name__ == "__main__":``) and kept for the next call with as many workers.
     ``max_steps``: the episodes' ``time_limit`` (default: each id's registered one).
     ``gif_dir``: where the assertion helpers write the GIF of a failing episode.
     Every other keyword goes to ``gymnasium.make`` (``shield="none"``, ``deadlock_window=2.0``, …).
@@ -285,12 +289,38 @@ def run_episodes(
         # a deep copy per episode where pickling fails, so that state does not leak between episodes
         rows = [_run_task(e, s, blob, policy if blob is not None else _fresh(policy), env_kwargs) for e, s in tasks]
     else:
-        ctx = multiprocessing.get_context("spawn")
-        with concurrent.futures.ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
+        pool = _pool(n)
+        try:
             futures = [pool.submit(_run_task, e, s, blob, None, env_kwargs) for e, s in tasks]
             rows = [f.result() for f in futures]
+        except concurrent.futures.process.BrokenProcessPool as err:
+            _POOLS.pop(n, None)
+            raise ShieldnavError(
+                "a worker process of run_episodes died: run from a file whose script code sits under `if __name__ == \"__main__\":` "
+                "(worker processes are spawned and import the main module), or pass workers=1 to run in this process"
+            ) from err
     rows.sort(key=lambda r: (r.env_id, r.seed))
     return EpisodeTable(rows, blob, policy, env_kwargs, gif_dir=None if gif_dir is None else os.fspath(gif_dir))
+
+
+#: Worker pools by size, kept for the next call (starting a worker imports shieldnav: about a second).
+_POOLS: dict[int, concurrent.futures.ProcessPoolExecutor] = {}
+
+
+def _pool(n: int) -> concurrent.futures.ProcessPoolExecutor:
+    pool = _POOLS.get(n)
+    if pool is None:
+        pool = _POOLS[n] = concurrent.futures.ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"))
+    return pool
+
+
+def _shutdown_pools() -> None:
+    for pool in _POOLS.values():
+        pool.shutdown(cancel_futures=True)
+    _POOLS.clear()
+
+
+atexit.register(_shutdown_pools)
 
 
 def _fresh(policy: Any) -> Any:
