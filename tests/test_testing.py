@@ -180,3 +180,24 @@ def test_plugin_fixtures_gif_dir_and_summary(pytester):
     result.stdout.fnmatch_lines(["*ConstrictedPassage-v0 seed 1: first contact at step 89 (t = 1.78 s)*"])
     result.stdout.fnmatch_lines(["shieldnav: 2 episodes run, 1 with a contact, 0 with a deadlock"])
     assert (gifs / "ConstrictedPassage-v0-seed1-contact.gif").is_file()
+
+
+def test_an_sb3_like_model_acts_deterministically():
+    class Model:
+        """What run_episodes reads of an SB3 model: ``predict(obs, deterministic=True) -> (action, state)``."""
+
+        def predict(self, obs, deterministic=False):
+            assert deterministic
+            return np.array([0.0, 1.0, 0.0], np.float32), None
+
+    (row,) = run_episodes(Model(), CP, [0], workers=1, max_steps=100, shield="none")
+    assert row.first_contact_step == 89
+
+
+def test_an_unguarded_script_with_workers_is_a_clear_error(tmp_path):
+    import subprocess
+    import sys
+
+    script = "from shieldnav.testing import run_episodes\nrun_episodes('scripted', 'ConstrictedPassage-v0', [0, 1], workers=2, max_steps=3)\n"
+    out = subprocess.run([sys.executable, "-"], input=script, capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert out.returncode != 0 and "ShieldnavError" in out.stderr and 'if __name__ == "__main__"' in out.stderr
