@@ -8,13 +8,14 @@ Fixtures:
   assertion helpers write the GIF of a failing episode there.
 
 Options: ``--shieldnav-gif-dir DIR`` (GIFs of failing episodes), ``--shieldnav-workers N``
-(processes per ``run_episodes`` call; default: the CPUs available). At the end of the run a
+(processes per ``run_episodes`` call; default: the CPUs available, 1 under pytest-xdist). At the end of the run a
 line reports the episodes run and how many had a contact or a deadlock. Works with
 pytest-xdist: every test records its counts in its report, and the controller adds them up.
 """
 
 from __future__ import annotations
 
+import os
 from typing import Any, Callable, Iterator
 
 import pytest
@@ -27,7 +28,7 @@ _DEADLOCKS = "shieldnav_deadlock_episodes"
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("shieldnav", "shieldnav episode checks")
     group.addoption("--shieldnav-gif-dir", default=None, metavar="DIR", help="write a GIF of each failing episode check into DIR")
-    group.addoption("--shieldnav-workers", type=int, default=None, metavar="N", help="processes per run_episodes call (default: the CPUs available)")
+    group.addoption("--shieldnav-workers", type=int, default=None, metavar="N", help="processes per run_episodes call (default: the CPUs available; 1 under pytest-xdist)")
 
 
 class _Totals:
@@ -84,7 +85,10 @@ def shieldnav_runner(request: pytest.FixtureRequest) -> Callable[..., Any]:
     node = request.node
 
     def run(policy: Any, env_ids: Any, seeds: Any, **kwargs: Any) -> Any:
-        kwargs.setdefault("workers", getattr(options, "shieldnav_workers", None))
+        workers = getattr(options, "shieldnav_workers", None)
+        if workers is None and os.environ.get("PYTEST_XDIST_WORKER"):
+            workers = 1  # pytest-xdist already runs a process per CPU
+        kwargs.setdefault("workers", workers)
         kwargs.setdefault("gif_dir", getattr(options, "shieldnav_gif_dir", None))
         table = run_episodes(policy, env_ids, seeds, **kwargs)
         node.user_properties.append((_EPISODES, len(table)))
