@@ -167,7 +167,7 @@ impl PyShield {
             braking: BrakingModel { tracker, dt, margin: brake_margin },
             rotation_weight,
         };
-        Ok(Self { inner: Shield::new(config).map_err(to_py)? })
+        Ok(Self { inner: Shield::new(config).map_err(|e| to_py(python_names(e)))? })
     }
 
     /// filter(points, u_nom, yaw=None, omega=None, rotation=None, extra_A=None, extra_b=None,
@@ -210,7 +210,7 @@ impl PyShield {
         points: &Bound<'_, PyAny>,
         u_nom: &Bound<'_, PyAny>,
         position: &Bound<'_, PyAny>,
-        yaw: Option<f64>,
+        #[pyo3(from_py_with = crate::errors::shield_args::yaw)] yaw: Option<f64>,
         omega: Option<&Bound<'_, PyAny>>,
         rotation: Option<&Bound<'_, PyAny>>,
         extra_A: Option<&Bound<'_, PyAny>>,
@@ -247,6 +247,15 @@ impl PyShield {
     fn __repr__(&self) -> String {
         let c = self.inner.config();
         format!("Shield(semi_axes={:?}, gamma={}, kappa={}, alpha={}, crop_radius={:?}, u_max={:?}, method={:?})", c.semi_axes, c.gamma, c.kappa, c.alpha, c.scan.crop_radius, c.u_max, c.method.name())
+    }
+}
+
+/// A core error about a configuration field, named by the constructor's keyword for it (the
+/// braking model's `margin` is `brake_margin`).
+fn python_names(err: shieldnav_core::Error) -> shieldnav_core::Error {
+    match err {
+        shieldnav_core::Error::InvalidArgument { name: "margin", reason } => shieldnav_core::Error::InvalidArgument { name: "brake_margin", reason },
+        other => other,
     }
 }
 

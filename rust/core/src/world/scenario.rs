@@ -171,7 +171,8 @@ impl Scenario {
     pub fn check_start(&self, shape: &RobotShape) -> Result<()> {
         let p = self.start;
         let reach = shape.half_diagonal();
-        let at = |what: String| Error::invalid("start", format!("the robot's footprint ({} × {} m) at ({}, {}, yaw {}) {what}", shape.length, shape.width, p.x, p.y, p.yaw));
+        let size = format!("robot_length × robot_width = {} × {} m", shape.length, shape.width);
+        let at = |what: String| Error::invalid("start", format!("the robot's footprint ({size}) at ({}, {}, yaw {}) {what}", p.x, p.y, p.yaw));
         let mut moving = Vec::new();
         for o in &self.obstacles {
             o.segments_at(0.0, &mut moving);
