@@ -111,3 +111,9 @@ def test_a_robot_too_wide_for_the_start_names_robot_width():
 
     with pytest.raises(InvalidArgumentError, match="robot_width"):
         gym.make("shieldnav/OdometryJump-v0", robot_width=6.2e16)
+
+
+@pytest.mark.parametrize("method", [None, 3, b"composite", ["composite"]])
+def test_a_method_of_no_string_names_method(method):
+    with pytest.raises(InvalidArgumentError, match="invalid `method`"):
+        Shield(method=method)
