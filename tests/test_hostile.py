@@ -76,3 +76,44 @@ def test_a_map_of_open_floor_is_refused_as_a_map_file_error(tmp_path):
     (tmp_path / "free.yaml").write_text("image: free.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
     with pytest.raises(MapFileError, match="no free region inside the building"):
         World(ros_map=str(tmp_path / "free.yaml"))
+
+
+@pytest.mark.parametrize("yaw", ["", 10**400, True])
+def test_filter_world_names_a_yaw_of_the_wrong_type(yaw):
+    with pytest.raises(InvalidArgumentError, match="invalid `yaw`"):
+        Shield().filter_world(np.array([[1.0, 0.5]]), np.array([1.0, 0.0]), np.zeros(2), yaw=yaw)
+
+
+def test_a_brake_margin_out_of_range_names_brake_margin():
+    with pytest.raises(InvalidArgumentError, match="invalid `brake_margin`"):
+        Shield(brake_margin=2.76e16)
+
+
+@pytest.mark.parametrize("u_nom", [(0.0, 1.04e10), (-3e12, 5e11), (1e16, 0.0)])
+def test_extra_rows_with_a_huge_nominal_command_are_solved(u_nom):
+    # the braking shield's box against a nominal command of 1e10 m/s and more, by Clarabel
+    out = Shield(method="braking").filter(
+        np.array([[0.0, 2.0], [1.0, -2.0]]), np.array(u_nom), extra_A=np.array([[0.0, -1.0]]), extra_b=np.array([0.0]), velocity=[0.0, 0.0, 0.0]
+    )
+    assert np.all(np.abs(out.u) <= [1.6, 0.8])
+    assert out.feasible and -out.u[1] >= -1e-9
+
+
+def test_an_observation_mode_of_no_string_names_observation():
+    import gymnasium as gym
+
+    with pytest.raises(InvalidArgumentError, match="invalid `observation`"):
+        gym.make("shieldnav/ConstrictedPassage-v0", observation=np.array([True, True]))
+
+
+def test_a_robot_too_wide_for_the_start_names_robot_width():
+    import gymnasium as gym
+
+    with pytest.raises(InvalidArgumentError, match="robot_width"):
+        gym.make("shieldnav/OdometryJump-v0", robot_width=6.2e16)
+
+
+@pytest.mark.parametrize("method", [None, 3, b"composite", ["composite"]])
+def test_a_method_of_no_string_names_method(method):
+    with pytest.raises(InvalidArgumentError, match="invalid `method`"):
+        Shield(method=method)

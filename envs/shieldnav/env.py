@@ -151,9 +151,10 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         report_timing: bool = False,
         **config: Any,
     ) -> None:
-        if observation not in _OBSERVATIONS:
+        # (`in` on an array compares element-wise: a bare ValueError)
+        if not isinstance(observation, str) or observation not in _OBSERVATIONS:
             raise InvalidArgumentError(f"invalid `observation`: expected one of {_OBSERVATIONS}, got {observation!r}")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+        if render_mode is not None and (not isinstance(render_mode, str) or render_mode not in self.metadata["render_modes"]):
             raise InvalidArgumentError(
                 f"invalid `render_mode`: expected one of {self.metadata['render_modes']} or None, got {render_mode!r}"
             )

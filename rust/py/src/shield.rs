@@ -114,7 +114,7 @@ impl PyShield {
         alpha = ShieldConfig::default().alpha,
         crop_radius = ShieldConfig::default().scan.crop_radius,
         u_max = ShieldConfig::default().u_max,
-        method = ShieldConfig::default().method.name(),
+        method = ShieldConfig::default().method.name().to_string(),
         safety_distance = ShieldConfig::default().safety_distance,
         height_band = ShieldConfig::default().scan.height_band,
         voxel_size = ShieldConfig::default().scan.voxel_size,
@@ -136,7 +136,7 @@ impl PyShield {
         #[pyo3(from_py_with = crate::errors::shield_args::alpha)] alpha: f64,
         #[pyo3(from_py_with = crate::errors::shield_args::crop_radius)] crop_radius: Option<f64>,
         #[pyo3(from_py_with = crate::errors::shield_args::u_max)] u_max: Option<Vec<f64>>,
-        method: &str,
+        #[pyo3(from_py_with = method_arg)] method: String,
         #[pyo3(from_py_with = crate::errors::shield_args::safety_distance)] safety_distance: f64,
         #[pyo3(from_py_with = crate::errors::shield_args::height_band)] height_band: Option<(f64, f64)>,
         #[pyo3(from_py_with = crate::errors::shield_args::voxel_size)] voxel_size: Option<f64>,
@@ -161,14 +161,14 @@ impl PyShield {
             kappa,
             alpha,
             u_max,
-            method: ShieldMethod::parse(method).map_err(to_py)?,
+            method: ShieldMethod::parse(&method).map_err(to_py)?,
             safety_distance,
             scan: ScanFilter { crop_radius, height_band, voxel_size, angular_bins },
             grad_eps,
             braking: BrakingModel { tracker, dt, margin: brake_margin },
             rotation_weight,
         };
-        Ok(Self { inner: Shield::new(config).map_err(to_py)? })
+        Ok(Self { inner: Shield::new(config).map_err(|e| to_py(python_names(e)))? })
     }
 
     /// filter(points, u_nom, yaw=None, omega=None, rotation=None, extra_A=None, extra_b=None,
@@ -211,7 +211,7 @@ impl PyShield {
         points: &Bound<'_, PyAny>,
         u_nom: &Bound<'_, PyAny>,
         position: &Bound<'_, PyAny>,
-        yaw: Option<f64>,
+        #[pyo3(from_py_with = crate::errors::shield_args::yaw)] yaw: Option<f64>,
         omega: Option<&Bound<'_, PyAny>>,
         rotation: Option<&Bound<'_, PyAny>>,
         extra_A: Option<&Bound<'_, PyAny>>,
@@ -248,6 +248,20 @@ impl PyShield {
     fn __repr__(&self) -> String {
         let c = self.inner.config();
         format!("Shield(semi_axes={:?}, gamma={}, kappa={}, alpha={}, crop_radius={:?}, u_max={:?}, method={:?})", c.semi_axes, c.gamma, c.kappa, c.alpha, c.scan.crop_radius, c.u_max, c.method.name())
+    }
+}
+
+/// `method`, a string, else an `InvalidArgumentError` naming it.
+fn method_arg(obj: &Bound<'_, PyAny>) -> PyResult<String> {
+    obj.extract::<String>().map_err(|_| invalid("method", format!("expected a method name (str), got {}", obj.repr().map(|r| r.to_string()).unwrap_or_default())))
+}
+
+/// A core error about a configuration field, named by the constructor's keyword for it (the
+/// braking model's `margin` is `brake_margin`).
+fn python_names(err: shieldnav_core::Error) -> shieldnav_core::Error {
+    match err {
+        shieldnav_core::Error::InvalidArgument { name: "margin", reason } => shieldnav_core::Error::InvalidArgument { name: "brake_margin", reason },
+        other => other,
     }
 }
 

@@ -148,7 +148,8 @@ pub(crate) fn inner_rect_signed_distance(shape: &RobotShape, q: &[Point2]) -> Re
 pub fn check_start(shape: &RobotShape, scenario: &Scenario) -> Result<()> {
     let p = scenario.start;
     let reach = shape.half_diagonal();
-    let at = |what: String| Error::invalid("start", format!("the robot's footprint ({} × {} m) at ({}, {}, yaw {}) {what}", shape.length, shape.width, p.x, p.y, p.yaw));
+    let size = format!("robot_length × robot_width = {} × {} m", shape.length, shape.width);
+    let at = |what: String| Error::invalid("start", format!("the robot's footprint ({size}) at ({}, {}, yaw {}) {what}", p.x, p.y, p.yaw));
     let mut moving = Vec::new();
     for o in &scenario.obstacles {
         o.segments_at(0.0, &mut moving);

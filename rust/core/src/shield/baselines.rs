@@ -6,7 +6,8 @@ use super::filter::Shield;
 use super::filter::{to_world, Filtered};
 use super::input::{BodyState, Scan};
 use super::qp::{QpSolution, MAX_VARS};
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::math::Vec3;
 
 impl Shield {
     /// The hard-min baseline: the nearest point's ellipsoidal CBF only.
@@ -17,13 +18,19 @@ impl Shield {
         let env = self.envelope;
         let pts = self.selected_f64(scan);
         let n = pts.len() / dim;
-        let nearest = (0..n)
-            .map(|i| {
-                let p = &pts[i * dim..(i + 1) * dim];
-                [p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]
-            })
-            .map(|p| (env.h_body(&p), p))
-            .min_by(|a, b| a.0.total_cmp(&b.0));
+        let mut nearest: Option<(f64, Vec3)> = None;
+        for i in 0..n {
+            let c = &pts[i * dim..(i + 1) * dim];
+            let p = [c[0], c[1], if dim == 3 { c[2] } else { 0.0 }];
+            let h = env.h_body(&p);
+            // (a point 1e154 m away: its h, gradient or ∂h/∂t overflows)
+            if !(h.is_finite() && env.dh_dt_body(&p, &state.omega).is_finite()) {
+                return Err(too_far());
+            }
+            if nearest.is_none_or(|(hn, _)| h < hn) {
+                nearest = Some((h, p));
+            }
+        }
         match nearest {
             None => {
                 let sol = self.solve_row(u_nom, &[0.0; 3], f64::NEG_INFINITY, u_max.as_deref(), extra)?;
@@ -53,6 +60,9 @@ impl Shield {
             let p = &pts[i * dim..(i + 1) * dim];
             let d = to_world(&r, dim, &[p[0], p[1], if dim == 3 { p[2] } else { 0.0 }]);
             let h = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - sd2;
+            if !h.is_finite() {
+                return Err(too_far());
+            }
             let g = [-2.0 * d[0], -2.0 * d[1], -2.0 * d[2]];
             self.rows.push(&g[..dim], -alpha * h)?;
             // a violated row no direction helps (a point at the robot's centre)
@@ -68,4 +78,9 @@ impl Shield {
         let sol = if stuck { QpSolution { u: [0.0; MAX_VARS], active: true, feasible: false } } else { solve_rows(u_nom, &self.rows, u_max.as_deref())? };
         Ok(Filtered { value: h_min, h_min, grad_p: g_near, dh_dt: 0.0, num_points: n, sol, omega: state.omega, braked: false, recovering: false, sweep_h: f64::NAN })
     }
+}
+
+/// The error of a point whose barrier is no finite number: the composite kernel's.
+fn too_far() -> Error {
+    Error::invalid("points", "contains NaN or inf (or a coordinate too large to square)")
 }

@@ -94,14 +94,15 @@ impl LinearConstraints {
         (&self.rows[k * self.dim..(k + 1) * self.dim], self.rhs[k])
     }
 
-    /// Largest violation `max_k (c_k − a_kᵀu)⁺` of a command.
+    /// Largest violation `max_k (c_k − a_kᵀu)⁺` of a command; NaN if a row's value at `u` is
+    /// none (its products overflow in both directions).
     pub fn max_violation(&self, u: &[f64]) -> f64 {
         (0..self.len())
             .map(|k| {
                 let (a, c) = self.row(k);
                 c - a.iter().zip(u).map(|(x, y)| x * y).sum::<f64>()
             })
-            .fold(0.0, f64::max)
+            .fold(0.0, |m: f64, v| if m.is_nan() || v.is_nan() { f64::NAN } else { m.max(v) })
     }
 }
 
@@ -168,6 +169,33 @@ fn solved(s: SolverStatus) -> bool {
     matches!(s, SolverStatus::Solved | SolverStatus::AlmostSolved)
 }
 
+fn infeasible(s: SolverStatus) -> bool {
+    matches!(s, SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible)
+}
+
+/// `P = I/σ`, `q = −u_nom/σ`: the objective `(½‖u‖² − u_nomᵀu)/σ`.
+fn objective(u_nom: &[f64], sigma: f64) -> (CscMatrix<f64>, Vec<f64>) {
+    let mut p = CscMatrix::identity(u_nom.len());
+    p.nzval.iter_mut().for_each(|v| *v /= sigma);
+    (p, u_nom.iter().map(|v| -v / sigma).collect())
+}
+
+/// The least violation `t*` of `rows` within the box, an LP in `(u, t)`, and its solution;
+/// Clarabel's status if it finds none.
+fn least_violation(rows: &LinearConstraints, u_max: Option<&[f64]>) -> Result<std::result::Result<(f64, Vec<f64>), SolverStatus>> {
+    let (d, m) = (rows.dim(), rows.len());
+    let n_box = if u_max.is_some() { 2 * d } else { 0 };
+    let mut t_col: Vec<(usize, usize, f64)> = (0..m).map(|k| (k, d, -1.0)).collect();
+    t_col.push((m + n_box, d, -1.0)); // −t + s = 0, s ≥ 0  ⇔  t ≥ 0
+    let a_t = build(rows, d + 1, u_max, &t_col);
+    let mut b_t = rhs(rows, u_max);
+    b_t.push(0.0);
+    let mut q_t = vec![0.0; d + 1];
+    q_t[d] = 1.0;
+    let (status, x) = run(&CscMatrix::zeros((d + 1, d + 1)), &q_t, &a_t, &b_t)?;
+    Ok(if solved(status) { Ok((x[d].max(0.0), x)) } else { Err(status) })
+}
+
 /// Solves the many-row filter QP with Clarabel (see the module docs for the fallback).
 pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>) -> Result<QpSolution> {
     super::qp::check_command(u_nom, u_max)?;
@@ -179,49 +207,64 @@ pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>
     for j in 0..d {
         clamped[j] = u_max.map_or(u_nom[j], |m| u_nom[j].clamp(-m[j], m[j]));
     }
-    if rows.max_violation(&clamped[..d]) <= 0.0 {
+    let violation = rows.max_violation(&clamped[..d]);
+    if violation.is_nan() {
+        return Err(Error::invalid("u_nom", format!("the rows' values a_k·u at u_nom = {u_nom:?} overflow: command and rows too large together")));
+    }
+    if violation <= 0.0 {
         return Ok(QpSolution { u: clamped, active: false, feasible: true });
     }
-    let p = CscMatrix::identity(d);
-    let q: Vec<f64> = u_nom.iter().map(|v| -v).collect();
     let a = build(rows, d, u_max, &[]);
     let b = rhs(rows, u_max);
-    let (status, x) = run(&p, &q, &a, &b)?;
+    // ½‖u‖² − u_nomᵀu; if Clarabel stops with neither an answer nor infeasibility, once more
+    // divided by σ = ‖u_nom‖∞ (the same minimiser, a linear term of order 1: a command of 1e10
+    // m/s against a box of 1.6 m/s stops the unscaled solve with DualInfeasible)
+    let (p, q) = objective(u_nom, 1.0);
+    let (mut status, mut x) = run(&p, &q, &a, &b)?;
+    if !solved(status) && !infeasible(status) {
+        let sigma = u_nom.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        let (p_s, q_s) = objective(u_nom, sigma);
+        (status, x) = run(&p_s, &q_s, &a, &b)?;
+    }
     let mut u = [0.0; super::qp::MAX_VARS];
+    // a command is called feasible only if it meets every row to the tolerance the closed-form
+    // filter uses (at extreme magnitudes an interior point solver can stop short of a row)
+    let given = rows;
+    let meets = |u: &[f64]| {
+        (0..given.len()).all(|k| {
+            let (row, c) = given.row(k);
+            row.iter().zip(u).map(|(a, v)| a * v).sum::<f64>() >= c - super::qp::ROW_TOLERANCE * c.abs().max(1.0)
+        })
+    };
     if solved(status) {
-        // Clarabel's answer, held to the box exactly and called feasible only if it meets every
-        // row to the tolerance the closed-form filter uses (at extreme magnitudes an interior
-        // point solver can stop short of a row)
+        // Clarabel's answer, held to the box exactly
         for j in 0..d {
             u[j] = u_max.map_or(x[j], |m| x[j].clamp(-m[j], m[j]));
         }
-        let meets = (0..rows.len()).all(|k| {
-            let (row, c) = rows.row(k);
-            row.iter().zip(&u[..d]).map(|(a, v)| a * v).sum::<f64>() >= c - super::qp::ROW_TOLERANCE * c.abs().max(1.0)
-        });
-        return Ok(QpSolution { u, active: true, feasible: meets });
+        return Ok(QpSolution { u, active: true, feasible: meets(&u[..d]) });
     }
-    if !matches!(status, SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible) {
-        return Err(Error::Solver(format!("Clarabel stopped with {status:?}")));
-    }
-    // Stage 1: the least possible violation t*, an LP in (u, t).
-    let m = rows.len();
-    let n_box = if u_max.is_some() { 2 * d } else { 0 };
-    let mut t_col: Vec<(usize, usize, f64)> = (0..m).map(|k| (k, d, -1.0)).collect();
-    t_col.push((m + n_box, d, -1.0)); // −t + s = 0, s ≥ 0  ⇔  t ≥ 0
-    let a_t = build(rows, d + 1, u_max, &t_col);
-    let mut b_t = b.clone();
-    b_t.push(0.0);
-    let mut q_t = vec![0.0; d + 1];
-    q_t[d] = 1.0;
-    let (status, x) = run(&CscMatrix::zeros((d + 1, d + 1)), &q_t, &a_t, &b_t)?;
-    if !solved(status) {
-        return Err(Error::Solver(format!("Clarabel could not find the least violation: {status:?}")));
-    }
-    let t_star = x[d].max(0.0);
+    // Infeasible, or Clarabel stopped without an answer (a row 0·u ≥ 1e150: NumericalError):
+    // Stage 1: the least possible violation t*; if Clarabel fails on the rows as given, on the
+    // rows divided by max(1, |c_k|, ‖a_k‖∞), the same half-spaces
+    let (rows, t_star, x) = match least_violation(rows, u_max)? {
+        Ok((t, x)) => (rows.clone(), t, x),
+        Err(_) => {
+            let mut scaled = LinearConstraints::new(d);
+            for k in 0..rows.len() {
+                let (row, c) = rows.row(k);
+                let s = row.iter().fold(c.abs().max(1.0), |m, v| m.max(v.abs()));
+                let row: Vec<f64> = row.iter().map(|v| v / s).collect();
+                scaled.push(&row, c / s)?;
+            }
+            match least_violation(&scaled, u_max)? {
+                Ok((t, x)) => (scaled, t, x),
+                Err(status) => return Err(Error::Solver(format!("Clarabel could not find the least violation: {status:?}"))),
+            }
+        }
+    };
     // Stage 2: the command closest to u_nom with violation at most t*.
     let mut relaxed = LinearConstraints::new(d);
-    for k in 0..m {
+    for k in 0..rows.len() {
         let (row, c) = rows.row(k);
         relaxed.push(row, c - t_star - 1e-9 * (1.0 + t_star))?;
     }
@@ -230,5 +273,5 @@ pub fn solve_rows(u_nom: &[f64], rows: &LinearConstraints, u_max: Option<&[f64]>
     for j in 0..d {
         u[j] = u_max.map_or(src[j], |m| src[j].clamp(-m[j], m[j]));
     }
-    Ok(QpSolution { u, active: true, feasible: false })
+    Ok(QpSolution { u, active: true, feasible: meets(&u[..d]) })
 }

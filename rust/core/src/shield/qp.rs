@@ -46,7 +46,8 @@ fn dot_d(g: &[f64], u: &[f64]) -> f64 {
 
 /// Solves `min ‖u − u_nom‖² s.t. gᵀu ≥ b` and, with `u_max`, `|u_j| ≤ u_max_j`, exactly.
 /// `u_nom`, `g` and `u_max` have the same length `d ∈ 1..=6`, every value finite, `u_max`
-/// ≥ 0 and `grad_eps` ≥ 0; else an error naming the argument.
+/// ≥ 0 and `grad_eps` ≥ 0; else an error naming the argument, as is a row that only a command
+/// beyond the largest float meets (`b`).
 ///
 /// ```
 /// use shieldnav_core::shield::project_halfspace_box;
@@ -67,7 +68,12 @@ pub fn project_halfspace_box(u_nom: &[f64], g: &[f64], b: f64, u_max: Option<&[f
     if !(grad_eps.is_finite() && grad_eps >= 0.0) {
         return Err(Error::invalid("grad_eps", format!("must be finite and ≥ 0, got {grad_eps}")));
     }
-    Ok(project_checked(u_nom, g, b, u_max, grad_eps))
+    let sol = project_checked(u_nom, g, b, u_max, grad_eps);
+    if !sol.u[..d].iter().all(|v| v.is_finite()) {
+        // (without a box, a row of b = 1e308 asks for a command no float holds)
+        return Err(Error::invalid("b", format!("no finite command meets the row g·u ≥ b (g = {g:?}, b = {b:e})")));
+    }
+    Ok(sol)
 }
 
 /// That `u_nom` (of 1 to [`MAX_VARS`] finite values) and `u_max` (as many, finite and ≥ 0) fit together.
