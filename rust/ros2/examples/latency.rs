@@ -11,6 +11,7 @@
 
 use std::time::{Duration, Instant};
 
+use futures::{FutureExt, StreamExt};
 use ros2_client::{NodeName, NodeOptions};
 use shieldnav_ros2::msg::{Header, LaserScan, Odometry, StringMsg, Twist, Vector3};
 use shieldnav_ros2::params::{RawParams, Value};
@@ -19,7 +20,7 @@ use shieldnav_ros2::ShieldNode;
 
 const BEAMS: usize = 1024;
 
-/// A 1024-beam 360° scan of a corridor 1.2 m wide, `shift` moving the walls a little so that
+/// A 1024-beam 360° scan of a corridor 2 m wide, `shift` moving the walls a little so that
 /// no two scans are equal.
 fn corridor(shift: f64) -> LaserScan {
     let a0 = -std::f32::consts::PI;
@@ -28,7 +29,7 @@ fn corridor(shift: f64) -> LaserScan {
         .map(|i| {
             let a = (a0 + i as f32 * da) as f64;
             let (s, c) = a.sin_cos();
-            let side = if s.abs() > 1e-6 { (0.6 + shift) / s.abs() } else { f64::INFINITY };
+            let side = if s.abs() > 1e-6 { (1.0 + shift) / s.abs() } else { f64::INFINITY };
             let end = if c > 1e-6 { 4.0 / c } else { f64::INFINITY };
             side.min(end).min(30.0) as f32
         })
@@ -111,36 +112,107 @@ fn main() {
     while let Ok(Some(_)) = cmd_sub.take() {}
     while let Ok(Some(_)) = state_sub.take() {}
 
+    // waits for the command without spinning (the probe would take a core from the node); a
+    // tick every 500 ms ends a wait for a command that does not come
+    let (tick_tx, mut ticks) = futures::channel::mpsc::unbounded::<()>();
+    std::thread::spawn(move || {
+        while tick_tx.unbounded_send(()).is_ok() {
+            std::thread::sleep(Duration::from_millis(500));
+        }
+    });
     let mut round = Vec::new();
     let mut lost = 0;
     for k in 0..iterations + 50 {
         let scan = corridor(1e-4 * (k % 50) as f64);
         let sent = Instant::now();
         let _ = scan_pub.publish(scan);
-        let mut got = false;
-        while sent.elapsed() < Duration::from_millis(500) {
-            if let Ok(Some(_)) = cmd_sub.take() {
-                got = true;
-                break;
+        while ticks.try_recv().is_ok() {}
+        let got = futures::executor::block_on(async {
+            futures::select! {
+                r = cmd_sub.async_take().fuse() => r.is_ok(),
+                _ = ticks.next() => false,
             }
-            std::thread::yield_now();
-        }
+        });
         let dt = sent.elapsed().as_secs_f64() * 1e6;
         if !got {
+            // its command may still come: let it, and drop it
             lost += 1;
+            std::thread::sleep(Duration::from_millis(100));
+            while let Ok(Some(_)) = cmd_sub.take() {}
         } else if k >= 50 {
             round.push(dt);
         }
         while let Ok(Some(_)) = state_sub.take() {}
         std::thread::sleep(Duration::from_millis(2));
     }
+    drop(n);
+    node.stop().expect("the node stops");
+
+    // the same round trip through an echo (a LaserScan in, a zero Twist out at once): what
+    // DDS itself costs on this host
+    let echo = std::thread::spawn(move || {
+        let ctx = context(domain as u16).expect("participant");
+        let mut n = ctx.new_node(NodeName::new("/", "latency_echo").unwrap(), NodeOptions::new().enable_rosout(false)).unwrap();
+        let ping = subscribe::<LaserScan>(&mut n, "/ping", "sensor_msgs", "LaserScan", sensor_qos()).unwrap();
+        let pong = advertise::<Twist>(&mut n, "/pong", "geometry_msgs", "Twist", command_out_qos()).unwrap();
+        futures::executor::block_on(async {
+            let mut s = Box::pin(ping.async_stream());
+            while let Some(r) = s.next().await {
+                match r {
+                    Ok((m, _)) if m.ranges.is_empty() => break,
+                    _ => {
+                        let _ = pong.publish(Twist::default());
+                    }
+                }
+            }
+        });
+    });
+    let mut n = ctx.new_node(NodeName::new("/", "latency_probe2").unwrap(), NodeOptions::new().enable_rosout(false)).unwrap();
+    let ping = advertise::<LaserScan>(&mut n, "/ping", "sensor_msgs", "LaserScan", sensor_qos()).unwrap();
+    let pong = subscribe::<Twist>(&mut n, "/pong", "geometry_msgs", "Twist", command_out_qos()).unwrap();
+    let start = Instant::now();
+    let mut ready = false;
+    while start.elapsed() < Duration::from_secs(60) && !ready {
+        let _ = ping.publish(corridor(0.0));
+        std::thread::sleep(Duration::from_millis(50));
+        ready = matches!(pong.take(), Ok(Some(_)));
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    while let Ok(Some(_)) = pong.take() {}
+    let mut echo_round = Vec::new();
+    for k in 0..iterations + 50 {
+        let scan = corridor(1e-4 * (k % 50) as f64);
+        let sent = Instant::now();
+        let _ = ping.publish(scan);
+        while ticks.try_recv().is_ok() {}
+        let got = futures::executor::block_on(async {
+            futures::select! {
+                r = pong.async_take().fuse() => r.is_ok(),
+                _ = ticks.next() => false,
+            }
+        });
+        let dt = sent.elapsed().as_secs_f64() * 1e6;
+        if !got {
+            std::thread::sleep(Duration::from_millis(100));
+            while let Ok(Some(_)) = pong.take() {}
+        } else if k >= 50 {
+            echo_round.push(dt);
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let _ = ping.publish(LaserScan::default());
+    let _ = ping.publish(LaserScan::default());
+
     println!("shieldnav-ros2 latency, {BEAMS}-beam LaserScan, method {method}, {iterations} scans");
     report("scan published → command received (DDS)", round);
+    if !echo_round.is_empty() {
+        report("the same through an echo (DDS alone)", echo_round);
+    }
     report("in the node: scan → command (no DDS)", in_node);
     report("the shield alone (ShieldOutcome)", shield);
     if lost > 0 {
         println!("{lost} scans got no command within 500 ms");
     }
     drop(n);
-    node.stop().expect("the node stops");
+    let _ = echo.join();
 }

@@ -82,7 +82,10 @@ impl RunningNode {
 
     /// Waits until the node stops (it stops on an error only).
     pub fn join(mut self) -> Result<(), String> {
-        self.stop.take().map(std::mem::forget);
+        if let Some(s) = self.stop.take() {
+            // (dropped, the sender would stop the loop)
+            std::mem::forget(s);
+        }
         match self.thread.take() {
             Some(t) => t.join().map_err(|_| "the node's thread panicked".to_string())?,
             None => Ok(()),
@@ -100,10 +103,7 @@ impl Drop for RunningNode {
 pub fn spawn(params: NodeParams) -> Result<RunningNode, String> {
     let (ready_tx, ready_rx) = mpsc::channel::<Result<(), String>>();
     let (stop_tx, stop_rx) = oneshot::channel::<()>();
-    let thread = std::thread::Builder::new()
-        .name("shieldnav-ros2".into())
-        .spawn(move || run(params, stop_rx, ready_tx))
-        .map_err(|e| format!("cannot start the node's thread: {e}"))?;
+    let thread = std::thread::Builder::new().name("shieldnav-ros2".into()).spawn(move || run(params, stop_rx, ready_tx)).map_err(|e| format!("cannot start the node's thread: {e}"))?;
     match ready_rx.recv() {
         Ok(Ok(())) => Ok(RunningNode { stop: Some(stop_tx), thread: Some(thread) }),
         Ok(Err(e)) => {
