@@ -9,7 +9,7 @@ use shieldnav_core::shield::{BodyState, Scan, Shield, ShieldMethod, ShieldOutcom
 
 use crate::msg::{Imu, LaserScan, Odometry, PointCloud2, Twist, Vector3};
 use crate::params::NodeParams;
-use crate::translate::{laser_scan_points, point_cloud_points, Rejection};
+use crate::translate::{laser_scan_points_with, point_cloud_points, BeamTable, Rejection};
 
 /// What the node holds of one input.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,6 +107,7 @@ pub struct ShieldNode {
     params: NodeParams,
     shield: Shield,
     points: Vec<f64>,
+    beams: BeamTable,
     scan: Held<ScanInfo>,
     /// Body velocity `(vx, vy, vz)` and angular velocity from odometry.
     velocity: Held<([f64; 3], [f64; 3])>,
@@ -119,7 +120,7 @@ impl ShieldNode {
     /// A node with checked parameters (see [`crate::params::RawParams::build`]).
     pub fn new(params: NodeParams) -> Result<Self, shieldnav_core::Error> {
         let shield = Shield::new(params.shield.clone())?;
-        Ok(Self { params, shield, points: Vec::new(), scan: Held::Missing, velocity: Held::Missing, imu_omega: Held::Missing, nominal: Held::Missing })
+        Ok(Self { params, shield, points: Vec::new(), beams: BeamTable::default(), scan: Held::Missing, velocity: Held::Missing, imu_omega: Held::Missing, nominal: Held::Missing })
     }
 
     /// The parameters.
@@ -138,7 +139,7 @@ impl ShieldNode {
     /// arrives. Returns the reason it was rejected.
     pub fn on_scan(&mut self, msg: &LaserScan, now: Instant) -> Result<(), Rejection> {
         self.points.clear();
-        let r = self.check_frame(&msg.header.frame_id).and_then(|_| laser_scan_points(msg, &self.params.mount, &mut self.points));
+        let r = self.check_frame(&msg.header.frame_id).and_then(|_| laser_scan_points_with(msg, &self.params.mount, &mut self.beams, &mut self.points));
         self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n }), now)
     }
 

@@ -49,6 +49,30 @@ pub const MAX_BEAMS: usize = 1 << 20;
 /// Points a cloud may hold.
 pub const MAX_CLOUD_POINTS: usize = 1 << 24;
 
+/// The body-frame direction of each beam of a scan layout (`angle_min`, `angle_increment`,
+/// beam count, mount yaw), kept from scan to scan: a scanner's layout does not change, and
+/// the sines and cosines are most of a scan's translation.
+#[derive(Debug, Clone, Default)]
+pub struct BeamTable {
+    key: Option<(u32, u32, usize, u64)>,
+    dirs: Vec<[f64; 2]>,
+}
+
+impl BeamTable {
+    fn directions(&mut self, a0: f32, da: f32, n: usize, mount: &Mount) -> &[[f64; 2]] {
+        let key = (a0.to_bits(), da.to_bits(), n, mount.yaw.to_bits());
+        if self.key != Some(key) {
+            self.dirs.clear();
+            self.dirs.extend((0..n).map(|i| {
+                let a = a0 as f64 + i as f64 * da as f64 + mount.yaw;
+                [a.cos(), a.sin()]
+            }));
+            self.key = Some(key);
+        }
+        &self.dirs
+    }
+}
+
 /// Appends the scan's returns to `out` as body-frame `(x, y, z)` rows (stride 3; `z` is the
 /// mount's height) and returns how many.
 ///
@@ -58,6 +82,11 @@ pub const MAX_CLOUD_POINTS: usize = 1 << 24;
 /// range limits are not finite numbers, its increment is zero, its beam count disagrees with
 /// its angles by more than one beam, or its intensities are neither empty nor one per range.
 pub fn laser_scan_points(msg: &LaserScan, mount: &Mount, out: &mut Vec<f64>) -> Result<usize, Rejection> {
+    laser_scan_points_with(msg, mount, &mut BeamTable::default(), out)
+}
+
+/// [`laser_scan_points`] with the beams' directions kept in `table` from call to call.
+pub fn laser_scan_points_with(msg: &LaserScan, mount: &Mount, table: &mut BeamTable, out: &mut Vec<f64>) -> Result<usize, Rejection> {
     let (a0, a1, da) = (msg.angle_min as f64, msg.angle_max as f64, msg.angle_increment as f64);
     if !(a0.is_finite() && a1.is_finite() && da.is_finite()) {
         return Err(format!("LaserScan angles are not finite (angle_min {a0}, angle_max {a1}, angle_increment {da})"));
@@ -86,7 +115,9 @@ pub fn laser_scan_points(msg: &LaserScan, mount: &Mount, out: &mut Vec<f64>) -> 
     }
     let start = out.len();
     out.reserve(3 * n);
-    for (i, &r) in msg.ranges.iter().enumerate() {
+    let dirs = table.directions(msg.angle_min, msg.angle_increment, n, mount);
+    let t = mount.translation;
+    for (&r, d) in msg.ranges.iter().zip(dirs) {
         let r = r as f64;
         let r = if r == f64::NEG_INFINITY {
             rmin
@@ -95,8 +126,7 @@ pub fn laser_scan_points(msg: &LaserScan, mount: &Mount, out: &mut Vec<f64>) -> 
         } else {
             continue;
         };
-        let a = a0 + i as f64 * da;
-        out.extend_from_slice(&mount.apply(r * a.cos(), r * a.sin(), 0.0));
+        out.extend_from_slice(&[t[0] + r * d[0], t[1] + r * d[1], t[2]]);
     }
     Ok((out.len() - start) / 3)
 }

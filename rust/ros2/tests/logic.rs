@@ -345,3 +345,77 @@ fn the_example_parameter_file_holds_the_defaults() {
     assert_eq!((p.scan_timeout, p.command_timeout, p.odom_timeout, p.watchdog_period), (d.scan_timeout, d.command_timeout, d.odom_timeout, d.watchdog_period));
     assert_eq!(p.mount, d.mount);
 }
+
+/// A 1024-beam scan from `x` on the axis of a corridor 2 m wide, closed 6 m ahead of the start
+/// and 3 m behind: range noise of ±1 cm, every 37th beam a NaN dropout, 8 m range.
+fn corridor_scan(x: f64, seed: &mut u64) -> LaserScan {
+    let a0 = -std::f32::consts::PI;
+    let da = 2.0 * std::f32::consts::PI / BEAMS as f32;
+    let ranges = (0..BEAMS)
+        .map(|i| {
+            if i % 37 == 0 {
+                return f32::NAN;
+            }
+            let a = (a0 + i as f32 * da) as f64;
+            let (s, c) = a.sin_cos();
+            let mut r = f64::INFINITY;
+            if s.abs() > 1e-9 {
+                r = r.min(1.0 / s.abs());
+            }
+            if c > 1e-9 {
+                r = r.min((6.0 - x) / c);
+            } else if c < -1e-9 {
+                r = r.min((x + 3.0) / -c);
+            }
+            *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let noise = ((*seed >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.02;
+            if r > 8.0 {
+                f32::INFINITY
+            } else {
+                (r + noise) as f32
+            }
+        })
+        .collect();
+    LaserScan {
+        header: Header { frame_id: "laser".into(), ..Default::default() },
+        angle_min: a0,
+        angle_max: a0 + (BEAMS - 1) as f32 * da,
+        angle_increment: da,
+        range_min: 0.05,
+        range_max: 8.0,
+        ranges,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_scan_sequence_down_a_corridor_passes_and_the_robot_stops_before_the_end_wall() {
+    // closed loop at the braking model's 50 Hz: the body is the tracker the model describes
+    let mut n = node("braking");
+    let tracker = shieldnav_core::robot::TrackerConfig::default();
+    let dt = 0.02;
+    let gain = tracker.gain(dt);
+    let (mut x, mut v, mut seed) = (0.0f64, [0.0f64; 3], 7u64);
+    let t0 = Instant::now();
+    let mut braked_or_slowed = 0;
+    for k in 0..500 {
+        let t = t0 + Duration::from_secs_f64(k as f64 * dt);
+        n.on_scan(&corridor_scan(x, &mut seed), t).unwrap();
+        let mut odom = Odometry::default();
+        odom.twist.twist.linear.x = v[0];
+        odom.twist.twist.linear.y = v[1];
+        odom.twist.twist.angular.z = v[2];
+        n.on_odometry(&odom, t).unwrap();
+        let out = n.on_nominal(&forward(1.5), t);
+        assert!(out.state.ok, "step {k} at x = {x:.3}: {:?}", out.state.reason);
+        braked_or_slowed += (out.command.linear.x < 1.5 - 1e-9) as usize;
+        let (next, _) = tracker.next_velocity(v, [out.command.linear.x, out.command.linear.y, out.command.angular.z], gain, dt);
+        v = next;
+        x += v[0] * dt;
+        // the ellipse (0.9 m ahead of the centre) never reaches the end wall
+        assert!(x + 0.9 < 6.0, "step {k}: the ellipse reaches the wall at x = {x:.3}");
+    }
+    assert!(x > 3.5, "the robot drives down the corridor (x = {x:.3})");
+    assert!(v[0].abs() < 0.05, "and stands before the end wall (v = {:.3})", v[0]);
+    assert!(braked_or_slowed > 0);
+}
