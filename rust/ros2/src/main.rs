@@ -2,6 +2,8 @@
 //!
 //! `shieldnav-ros2 [--params FILE.yaml] [--ros-args -p name:=value -r from:=to ...]`
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use shieldnav_ros2::params::{RawParams, NODE_NAME, PARAMETERS};
 
 fn main() {
@@ -36,11 +38,31 @@ fn main() {
         t.cmd,
         t.state
     );
-    match shieldnav_ros2::ros::spawn(params).and_then(|node| node.join()) {
-        Ok(()) => {}
+    // SIGINT / SIGTERM: stop the loop, which sends one last zero command and leaves the DDS
+    // network cleanly
+    // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
+    unsafe {
+        libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
+    }
+    let node = match shieldnav_ros2::ros::spawn(params) {
+        Ok(n) => n,
         Err(e) => {
             eprintln!("shieldnav-ros2: {e}");
             std::process::exit(1);
         }
+    };
+    while !STOP.load(Ordering::SeqCst) && !node.is_finished() {
+        std::thread::sleep(std::time::Duration::from_millis(50));
     }
+    if let Err(e) = node.stop() {
+        eprintln!("shieldnav-ros2: {e}");
+        std::process::exit(1);
+    }
+}
+
+static STOP: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_signal(_: libc::c_int) {
+    STOP.store(true, Ordering::SeqCst);
 }

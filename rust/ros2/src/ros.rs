@@ -80,6 +80,11 @@ impl RunningNode {
         }
     }
 
+    /// The node's loop has ended (it ends on [`RunningNode::stop`] only, or an error).
+    pub fn is_finished(&self) -> bool {
+        self.thread.as_ref().is_none_or(|t| t.is_finished())
+    }
+
     /// Waits until the node stops (it stops on an error only).
     pub fn join(mut self) -> Result<(), String> {
         if let Some(s) = self.stop.take() {
