@@ -139,7 +139,7 @@ impl ShieldNode {
     /// arrives. Returns the reason it was rejected.
     pub fn on_scan(&mut self, msg: &LaserScan, now: Instant) -> Result<(), Rejection> {
         self.points.clear();
-        let r = self.check_frame(&msg.header.frame_id).and_then(|_| laser_scan_points_with(msg, &self.params.mount, &mut self.beams, &mut self.points));
+        let r = self.check_frame(&msg.header.frame_id).and_then(|_| self.check_invalid(msg)).and_then(|_| laser_scan_points_with(msg, &self.params.mount, &mut self.beams, &mut self.points));
         self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n }), now)
     }
 
@@ -148,6 +148,17 @@ impl ShieldNode {
         self.points.clear();
         let r = self.check_frame(&msg.header.frame_id).and_then(|_| point_cloud_points(msg, &self.params.mount, &mut self.points));
         self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n }), now)
+    }
+
+    /// A scan mostly of NaN ranges (invalid measurements, REP 117) is a blinded sensor, not
+    /// free space.
+    fn check_invalid(&self, msg: &LaserScan) -> Result<(), Rejection> {
+        let nan = msg.ranges.iter().filter(|r| r.is_nan()).count();
+        let n = msg.ranges.len();
+        if n > 0 && self.params.max_invalid_fraction < 1.0 && nan as f64 > self.params.max_invalid_fraction * n as f64 {
+            return Err(format!("LaserScan has {nan} of {n} ranges NaN (invalid), more than max_invalid_fraction {}", self.params.max_invalid_fraction));
+        }
+        Ok(())
     }
 
     fn hold_scan(&mut self, r: Result<ScanInfo, Rejection>, now: Instant) -> Result<(), Rejection> {

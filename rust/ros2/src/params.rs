@@ -141,6 +141,7 @@ pub const PARAMETERS: &[(&str, &str)] = &[
     ("odom_timeout", "odometry / IMU older than this stops the robot, s (default 0.5)"),
     ("watchdog_rate", "rate of the zero commands sent while the nominal command is missing, Hz; 0: off (default 10)"),
     ("filter_on_scan", "also filter and publish on every scan, not only on every nominal command (default false)"),
+    ("max_invalid_fraction", "a LaserScan with a larger share of NaN ranges (invalid, not \"no return\") is rejected; 1 switches the check off (default 0.9)"),
     ("sensor_frame", "the frame_id scans and clouds must carry; empty: any (default empty)"),
     ("mount_x", "sensor position in the body frame, m (default 0)"),
     ("mount_y", "sensor position in the body frame, m (default 0)"),
@@ -174,6 +175,8 @@ pub struct NodeParams {
     pub filter_on_scan: bool,
     /// The frame scans and clouds must carry.
     pub sensor_frame: Option<String>,
+    /// A LaserScan with a larger share of NaN ranges is rejected (a blinded sensor).
+    pub max_invalid_fraction: f64,
     /// The sensor's mount on the body.
     pub mount: Mount,
     /// DDS domain.
@@ -400,6 +403,10 @@ impl RawParams {
             return Err(ParamError::new("domain_id", format!("must be from 0 to 232, got {domain}")));
         }
         let sensor_frame = g.string("sensor_frame", "")?;
+        let max_invalid_fraction = g.float("max_invalid_fraction", 0.9)?;
+        if !(0.0..=1.0).contains(&max_invalid_fraction) {
+            return Err(ParamError::new("max_invalid_fraction", format!("must be from 0 to 1, got {max_invalid_fraction}")));
+        }
         Ok(NodeParams {
             node_name: self.node_name.clone().unwrap_or_else(|| NODE_NAME.to_string()),
             shield,
@@ -412,6 +419,7 @@ impl RawParams {
             watchdog_period: (rate > 0.0).then(|| Duration::from_secs_f64(1.0 / rate)),
             filter_on_scan: g.bool("filter_on_scan", false)?,
             sensor_frame: (!sensor_frame.is_empty()).then_some(sensor_frame),
+            max_invalid_fraction,
             mount,
             domain_id: domain as u16,
         })

@@ -138,6 +138,7 @@ fn malformed_scans_are_rejected_with_the_reason_and_stop_the_robot() {
         (LaserScan { intensities: vec![1.0; 3], ..good.clone() }, "intensities"),
         (LaserScan { range_min: 5.0, range_max: 1.0, ..good.clone() }, "range_min"),
         (LaserScan { ranges: vec![], ..good.clone() }, "no ranges"),
+        (LaserScan { ranges: vec![f32::NAN; BEAMS], ..good.clone() }, "NaN (invalid)"),
     ];
     for (scan, why) in cases {
         let mut n = node("composite");
