@@ -6,7 +6,7 @@
 use std::time::{Duration, Instant};
 
 use ros2_client::{NodeName, NodeOptions, Publisher, Subscription};
-use shieldnav_ros2::msg::{Header, LaserScan, Odometry, StringMsg, Twist, Vector3};
+use shieldnav_ros2::msg::{Header, LaserScan, Odometry, PointCloud2, PointField, StringMsg, Twist, Vector3};
 use shieldnav_ros2::params::{RawParams, Value};
 use shieldnav_ros2::ros::{advertise, command_out_qos, context, sensor_qos, spawn, subscribe};
 
@@ -41,8 +41,35 @@ fn forward(v: f64) -> Twist {
     Twist { linear: Vector3 { x: v, y: 0.0, z: 0.0 }, angular: Vector3::default() }
 }
 
+/// A wall of points across the path at `x = d`, 1 m wide, at two heights (`x`, `y`, `z` float32).
+fn wall_cloud(d: f32) -> PointCloud2 {
+    let field = |name: &str, offset| PointField { name: name.into(), offset, datatype: PointField::FLOAT32, count: 1 };
+    let mut data = Vec::new();
+    let mut n = 0;
+    for k in -20..=20 {
+        for z in [0.1f32, 0.5] {
+            for v in [d, k as f32 * 0.025, z] {
+                data.extend_from_slice(&v.to_le_bytes());
+            }
+            n += 1;
+        }
+    }
+    PointCloud2 {
+        header: Header { frame_id: "lidar".into(), ..Default::default() },
+        height: 1,
+        width: n,
+        fields: vec![field("x", 0), field("y", 4), field("z", 8)],
+        is_bigendian: false,
+        point_step: 12,
+        row_step: 12 * n,
+        data,
+        is_dense: true,
+    }
+}
+
 struct Fake {
     scan: Publisher<LaserScan>,
+    cloud: Publisher<PointCloud2>,
     bad_scan: Publisher<Twist>,
     odom: Publisher<Odometry>,
     nominal: Publisher<Twist>,
@@ -93,6 +120,7 @@ fn the_node_over_loopback_dds() {
     let mut raw = RawParams::default();
     raw.set("domain_id", Value::Int(domain)).set("method", Value::Str("braking".into()));
     raw.set("scan_timeout", Value::Float(0.5)).set("command_timeout", Value::Float(0.5)).set("watchdog_rate", Value::Float(20.0));
+    raw.set("cloud_topic", Value::Str("/points".into()));
     let node = spawn(raw.build().expect("parameters")).expect("the node starts");
 
     let ctx = context(domain as u16).expect("participant");
@@ -100,6 +128,7 @@ fn the_node_over_loopback_dds() {
     let mut fake = Fake {
         scan: advertise(&mut n, "/scan", "sensor_msgs", "LaserScan", sensor_qos()).unwrap(),
         bad_scan: advertise(&mut n, "/scan", "sensor_msgs", "LaserScan", sensor_qos()).unwrap(),
+        cloud: advertise(&mut n, "/points", "sensor_msgs", "PointCloud2", sensor_qos()).unwrap(),
         odom: advertise(&mut n, "/odom", "nav_msgs", "Odometry", sensor_qos()).unwrap(),
         nominal: advertise(&mut n, "/cmd_vel_nominal", "geometry_msgs", "Twist", command_out_qos()).unwrap(),
         cmd: subscribe(&mut n, "/cmd_vel", "geometry_msgs", "Twist", command_out_qos()).unwrap(),
@@ -185,6 +214,21 @@ fn the_node_over_loopback_dds() {
         |s| s["ok"] == false && reason(s).contains("scan rejected"),
     );
     assert_eq!(s["command"][0], 0.0);
+
+    // a point cloud instead of the scan: read by field name, a wall ahead stops the robot
+    let cloud = wall_cloud(1.0);
+    let s = fake.until(
+        "a point cloud",
+        Duration::from_secs(20),
+        |f| {
+            let _ = f.cloud.publish(cloud.clone());
+            let _ = f.odom.publish(Odometry::default());
+            let _ = f.nominal.publish(forward(1.0));
+        },
+        |s| s["ok"] == true && s["scan_frame"] == "lidar",
+    );
+    assert_eq!(s["points_in_scan"], 82, "{s}");
+    assert!(s["command"][0].as_f64().unwrap() < 0.25, "forward at a wall of points: {s}");
 
     // the planner goes quiet: the watchdog sends zero, "stale nominal command"
     let s = fake.until(
