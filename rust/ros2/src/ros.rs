@@ -190,6 +190,17 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
         drop(tick_tx);
     }
 
+    // the node's background work (ROS graph, discovery info) on its own thread, off the
+    // command's path
+    std::thread::Builder::new()
+        .name("shieldnav-ros2-spinner".into())
+        .spawn(move || {
+            if let Err(e) = futures::executor::block_on(spinner.spin()) {
+                eprintln!("shieldnav-ros2: spinner stopped: {e:?}");
+            }
+        })
+        .map_err(|e| format!("cannot start the spinner: {e}"))?;
+
     let mut quiet = Quiet::default();
     let publish = |out: Output, quiet: &mut Quiet| {
         if let Some(r) = &out.state.reason {
@@ -204,7 +215,6 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
     };
 
     let main = async {
-        let mut spin = Box::pin(spinner.spin().fuse());
         let (mut scan_s, mut cloud_s, mut odom_s, mut imu_s) = (boxed(&scan), boxed(&cloud), boxed(&odom), boxed(&imu));
         let (mut nominal_s, mut stamped_s) = (boxed(&nominal), boxed(&nominal_stamped));
         let mut stop = stop.fuse();
@@ -260,9 +270,6 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                 }
                 _ = ticks.select_next_some() => {
                     if let Some(out) = shield.tick(Instant::now()) { publish(out, &mut quiet) }
-                }
-                r = spin => {
-                    if let Err(e) = r { quiet.note(&format!("spinner stopped: {e:?}")) }
                 }
                 _ = stop => break,
             }
