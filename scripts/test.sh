@@ -11,6 +11,8 @@ ruff check envs agents tests benchmarks
 cargo clippy --quiet --profile ci --workspace --all-targets -- -D warnings
 echo "== ${SECONDS} s; cargo test (rust/core) =="
 cargo test --quiet --profile ci
+echo "== ${SECONDS} s; cargo test (rust/ros2: the ROS 2 node, with a loopback DDS test) =="
+cargo test --quiet --profile ci -p shieldnav-ros2
 echo "== ${SECONDS} s; pytest =="
 python -m pytest -q --durations=8 tests
 echo "== done in ${SECONDS} s =="

@@ -1,0 +1,368 @@
+//! The node's decisions without the network: which messages it holds, when they are stale,
+//! and the command it sends. [`ShieldNode`] takes each message with the time it arrived and
+//! answers with an [`Output`]: the filtered command, or zero with the reason.
+
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+use shieldnav_core::shield::{BodyState, Scan, Shield, ShieldMethod, ShieldOutcome};
+
+use crate::msg::{Imu, LaserScan, Odometry, PointCloud2, Twist, Vector3};
+use crate::params::NodeParams;
+use crate::translate::{laser_scan_points_with, point_cloud_points, BeamTable, Rejection};
+
+/// What the node holds of one input.
+#[derive(Debug, Clone, PartialEq)]
+enum Held<T> {
+    /// Nothing received yet.
+    Missing,
+    /// A usable message, and when it arrived.
+    Valid(T, Instant),
+    /// The last message was rejected: why.
+    Rejected(Rejection),
+}
+
+impl<T> Held<T> {
+    /// The value if it is younger than `timeout` at `now`, else the reason it is not usable.
+    fn fresh(&self, what: &str, now: Instant, timeout: Duration) -> Result<&T, String> {
+        match self {
+            Held::Missing => Err(format!("no {what} received yet")),
+            Held::Rejected(r) => Err(format!("{what} rejected: {r}")),
+            Held::Valid(v, at) => {
+                let age = now.saturating_duration_since(*at);
+                if age > timeout {
+                    Err(format!("stale {what}: {:.3} s old (timeout {:.3} s)", age.as_secs_f64(), timeout.as_secs_f64()))
+                } else {
+                    Ok(v)
+                }
+            }
+        }
+    }
+}
+
+/// The scan the node holds: its points are in [`ShieldNode`]'s buffer.
+#[derive(Debug, Clone, PartialEq)]
+struct ScanInfo {
+    frame: String,
+    points: usize,
+}
+
+/// The state topic's content (`std_msgs/String`, this as one JSON object).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct State {
+    /// The filter ran and its command was sent (`false`: a zero command was sent, see `reason`).
+    pub ok: bool,
+    /// Why the command is zero, when it is.
+    pub reason: Option<String>,
+    /// The shield's method.
+    pub method: &'static str,
+    /// The barrier `H` (null when no point was used or the filter did not run).
+    #[serde(rename = "H")]
+    pub h: Option<f64>,
+    /// `min_i h_i` (null as `H`).
+    pub h_min: Option<f64>,
+    /// The constraints changed the command.
+    pub active: bool,
+    /// The constraints could be met.
+    pub feasible: bool,
+    /// The braking check sent the brake.
+    pub braked: bool,
+    /// A point is inside the ellipse: the braking shield's recovery command.
+    pub recovering: bool,
+    /// Points the shield used (after crop, band and down-sampling).
+    pub points_used: usize,
+    /// Returns in the scan held, before the shield's crop.
+    pub points_in_scan: usize,
+    /// The frame of the scan held.
+    pub scan_frame: Option<String>,
+    /// Age of the scan held (s).
+    pub scan_age: Option<f64>,
+    /// The shield's time for this command (µs).
+    pub solve_time_us: f64,
+    /// Nominal command `[vx, vy, vz, wx, wy, wz]` (null when none is held).
+    pub nominal: Option<[f64; 6]>,
+    /// Command sent `[vx, vy, vz, wx, wy, wz]`.
+    pub command: [f64; 6],
+}
+
+/// One command to send and its state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Output {
+    /// The command (`Twist`).
+    pub command: Twist,
+    /// The state to publish beside it.
+    pub state: State,
+}
+
+fn twist6(t: &Twist) -> [f64; 6] {
+    [t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z]
+}
+
+fn finite_twist(t: &Twist) -> bool {
+    twist6(t).iter().all(|v| v.is_finite())
+}
+
+/// The shield between a planner and a robot, without the network.
+pub struct ShieldNode {
+    params: NodeParams,
+    shield: Shield,
+    points: Vec<f64>,
+    beams: BeamTable,
+    scan: Held<ScanInfo>,
+    /// Body velocity `(vx, vy, vz)` and angular velocity from odometry.
+    velocity: Held<([f64; 3], [f64; 3])>,
+    /// Angular velocity from the IMU.
+    imu_omega: Held<[f64; 3]>,
+    nominal: Held<Twist>,
+}
+
+impl ShieldNode {
+    /// A node with checked parameters (see [`crate::params::RawParams::build`]).
+    pub fn new(params: NodeParams) -> Result<Self, shieldnav_core::Error> {
+        let shield = Shield::new(params.shield.clone())?;
+        Ok(Self { params, shield, points: Vec::new(), beams: BeamTable::default(), scan: Held::Missing, velocity: Held::Missing, imu_omega: Held::Missing, nominal: Held::Missing })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &NodeParams {
+        &self.params
+    }
+
+    fn check_frame(&self, frame: &str) -> Result<(), Rejection> {
+        match &self.params.sensor_frame {
+            Some(f) if f != frame => Err(format!("frame_id {frame:?} is not sensor_frame {f:?}")),
+            _ => Ok(()),
+        }
+    }
+
+    /// Takes a scan that arrived at `now`; a rejected scan stops the robot until a valid one
+    /// arrives. Returns the reason it was rejected.
+    pub fn on_scan(&mut self, msg: &LaserScan, now: Instant) -> Result<(), Rejection> {
+        self.points.clear();
+        let r = self.check_frame(&msg.header.frame_id).and_then(|_| self.check_invalid(msg)).and_then(|_| laser_scan_points_with(msg, &self.params.mount, &mut self.beams, &mut self.points));
+        self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n }), now)
+    }
+
+    /// Takes a point cloud that arrived at `now` (as [`ShieldNode::on_scan`]).
+    pub fn on_cloud(&mut self, msg: &PointCloud2, now: Instant) -> Result<(), Rejection> {
+        self.points.clear();
+        let r = self.check_frame(&msg.header.frame_id).and_then(|_| point_cloud_points(msg, &self.params.mount, &mut self.points));
+        self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n }), now)
+    }
+
+    /// A scan mostly of NaN ranges (invalid measurements, REP 117) is a blinded sensor, not
+    /// free space.
+    fn check_invalid(&self, msg: &LaserScan) -> Result<(), Rejection> {
+        let nan = msg.ranges.iter().filter(|r| r.is_nan()).count();
+        let n = msg.ranges.len();
+        if n > 0 && self.params.max_invalid_fraction < 1.0 && nan as f64 > self.params.max_invalid_fraction * n as f64 {
+            return Err(format!("LaserScan has {nan} of {n} ranges NaN (invalid), more than max_invalid_fraction {}", self.params.max_invalid_fraction));
+        }
+        Ok(())
+    }
+
+    fn hold_scan(&mut self, r: Result<ScanInfo, Rejection>, now: Instant) -> Result<(), Rejection> {
+        match r {
+            Ok(info) => {
+                self.scan = Held::Valid(info, now);
+                Ok(())
+            }
+            Err(reason) => {
+                self.points.clear();
+                self.scan = Held::Rejected(reason.clone());
+                Err(reason)
+            }
+        }
+    }
+
+    /// A scan or cloud that could not even be decoded.
+    pub fn reject_scan(&mut self, reason: Rejection) {
+        self.points.clear();
+        self.scan = Held::Rejected(reason);
+    }
+
+    /// Takes odometry: the body-frame velocity and angular velocity of its twist.
+    pub fn on_odometry(&mut self, msg: &Odometry, now: Instant) -> Result<(), Rejection> {
+        let t = &msg.twist.twist;
+        let bound = shieldnav_core::shield::MAX_BODY_RATE;
+        if !twist6(t).iter().all(|v| v.is_finite() && v.abs() <= bound) {
+            let reason = format!("Odometry twist is not finite or beyond ±{bound}: {:?}", twist6(t));
+            self.velocity = Held::Rejected(reason.clone());
+            return Err(reason);
+        }
+        let v = |x: &Vector3| [x.x, x.y, x.z];
+        self.velocity = Held::Valid((v(&t.linear), v(&t.angular)), now);
+        Ok(())
+    }
+
+    /// Takes the angular velocity of an IMU message.
+    pub fn on_imu(&mut self, msg: &Imu, now: Instant) -> Result<(), Rejection> {
+        let w = [msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z];
+        let bound = shieldnav_core::shield::MAX_BODY_RATE;
+        if !w.iter().all(|v| v.is_finite() && v.abs() <= bound) {
+            let reason = format!("Imu angular_velocity is not finite or beyond ±{bound}: {w:?}");
+            self.imu_omega = Held::Rejected(reason.clone());
+            return Err(reason);
+        }
+        self.imu_omega = Held::Valid(w, now);
+        Ok(())
+    }
+
+    /// A malformed odometry or IMU message.
+    pub fn reject_motion(&mut self, reason: Rejection) {
+        if self.params.topics.odom.is_some() {
+            self.velocity = Held::Rejected(reason.clone());
+        }
+        if self.params.topics.imu.is_some() {
+            self.imu_omega = Held::Rejected(reason);
+        }
+    }
+
+    /// Takes a nominal command and answers with the command to send.
+    pub fn on_nominal(&mut self, msg: &Twist, now: Instant) -> Output {
+        self.nominal = if finite_twist(msg) { Held::Valid(*msg, now) } else { Held::Rejected(format!("nominal Twist is not finite: {:?}", twist6(msg))) };
+        self.command(now)
+    }
+
+    /// A nominal command that could not be decoded: zero, with the reason.
+    pub fn reject_nominal(&mut self, reason: Rejection, now: Instant) -> Output {
+        self.nominal = Held::Rejected(reason);
+        self.command(now)
+    }
+
+    /// The watchdog: zero and the reason when the nominal command is missing or stale,
+    /// `None` while it is fresh (the command goes out at the nominal command's rate).
+    pub fn tick(&mut self, now: Instant) -> Option<Output> {
+        match self.nominal.fresh("nominal command", now, self.params.command_timeout) {
+            Ok(_) => None,
+            Err(reason) => Some(self.stop(reason, now)),
+        }
+    }
+
+    fn stop(&self, reason: String, now: Instant) -> Output {
+        let (scan_frame, scan_age, points_in_scan) = match &self.scan {
+            Held::Valid(info, at) => (Some(info.frame.clone()), Some(now.saturating_duration_since(*at).as_secs_f64()), info.points),
+            _ => (None, None, 0),
+        };
+        let nominal = match &self.nominal {
+            Held::Valid(t, _) => Some(twist6(t)),
+            _ => None,
+        };
+        Output {
+            command: Twist::default(),
+            state: State {
+                ok: false,
+                reason: Some(reason),
+                method: self.params.shield.method.name(),
+                h: None,
+                h_min: None,
+                active: false,
+                feasible: false,
+                braked: false,
+                recovering: false,
+                points_used: 0,
+                points_in_scan,
+                scan_frame,
+                scan_age,
+                solve_time_us: 0.0,
+                nominal,
+                command: [0.0; 6],
+            },
+        }
+    }
+
+    /// The command for the inputs held at `now`: the filtered nominal command, or zero with
+    /// the reason when an input is missing, stale or rejected, or the filter fails.
+    pub fn command(&mut self, now: Instant) -> Output {
+        match self.try_command(now) {
+            Ok(out) => out,
+            Err(reason) => self.stop(reason, now),
+        }
+    }
+
+    fn try_command(&mut self, now: Instant) -> Result<Output, String> {
+        let p = &self.params;
+        let nominal = *self.nominal.fresh("nominal command", now, p.command_timeout)?;
+        let (info, at) = match &self.scan {
+            Held::Valid(info, at) => (info.clone(), *at),
+            other => return Err(other.fresh("scan", now, p.scan_timeout).err().unwrap_or_default()),
+        };
+        self.scan.fresh("scan", now, p.scan_timeout)?;
+        let method = p.shield.method;
+        // the measured motion: odometry if configured, the IMU's ω if configured, else at rest
+        let velocity = match p.topics.odom {
+            Some(_) => Some(*self.velocity.fresh("odometry", now, p.odom_timeout)?),
+            None => None,
+        };
+        let imu = match p.topics.imu {
+            Some(_) => Some(*self.imu_omega.fresh("IMU", now, p.odom_timeout)?),
+            None => None,
+        };
+        let omega_measured = imu.or(velocity.map(|v| v.1)).unwrap_or([0.0; 3]);
+        let dim = self.shield.dim();
+        let n = twist6(&nominal);
+        let u_nom = &n[..dim];
+        let state = if dim == 2 {
+            if method == ShieldMethod::Braking {
+                let (v, w) = velocity.ok_or("the braking shield needs odometry")?;
+                BodyState::planar(0.0, nominal.angular.z).and_then(|s| s.with_velocity([v[0], v[1], w[2]]))
+            } else {
+                BodyState::planar(0.0, omega_measured[2])
+            }
+        } else {
+            let eye = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            let omega = if method == ShieldMethod::Braking { [n[3], n[4], n[5]] } else { omega_measured };
+            BodyState::spatial(eye, omega)
+        }
+        .map_err(|e| format!("body state: {e}"))?;
+        let scan = Scan::new_f64(&self.points, 3).map_err(|e| format!("scan: {e}"))?;
+        let out: ShieldOutcome = self.shield.filter(&scan, &state, u_nom).map_err(|e| format!("shield: {e}"))?;
+        if !out.feasible && !out.recovering && p.stop_when_infeasible {
+            return Err(format!("infeasible: no command in the box meets the barrier's row (H = {:.4}, h_min = {:.4})", out.value, out.h_min));
+        }
+        let mut cmd = Twist::default();
+        cmd.linear.x = out.u[0];
+        cmd.linear.y = out.u[1];
+        if dim == 3 {
+            cmd.linear.z = out.u[2];
+        }
+        if method == ShieldMethod::Braking {
+            if dim == 2 {
+                cmd.angular.z = out.omega[2];
+            } else {
+                cmd.angular = Vector3 { x: out.omega[0], y: out.omega[1], z: out.omega[2] };
+            }
+        } else {
+            cmd.angular = nominal.angular;
+        }
+        let used = out.num_points > 0;
+        Ok(Output {
+            command: cmd,
+            state: State {
+                ok: true,
+                reason: None,
+                method: method.name(),
+                h: used.then_some(out.value),
+                h_min: used.then_some(out.h_min),
+                active: out.active,
+                feasible: out.feasible,
+                braked: out.braked,
+                recovering: out.recovering,
+                points_used: out.num_points,
+                points_in_scan: info.points,
+                scan_frame: Some(info.frame),
+                scan_age: Some(now.saturating_duration_since(at).as_secs_f64()),
+                solve_time_us: out.solve_time_ns as f64 * 1e-3,
+                nominal: Some(n),
+                command: twist6(&cmd),
+            },
+        })
+    }
+}
+
+impl State {
+    /// The JSON text the state topic carries.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_else(|e| format!("{{\"ok\":false,\"reason\":\"state not serialisable: {e}\"}}"))
+    }
+}

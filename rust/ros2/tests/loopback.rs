@@ -1,0 +1,247 @@
+//! The node over DDS on this host: a fake robot and planner (the same client library) publish
+//! scans, odometry and nominal commands and read the node's command and state. Discovery runs
+//! over RustDDS's same-host loopback unicast (and multicast where the network has it), on a
+//! domain of its own.
+
+use std::time::{Duration, Instant};
+
+use ros2_client::{NodeName, NodeOptions, Publisher, Subscription};
+use shieldnav_ros2::msg::{Header, LaserScan, Odometry, PointCloud2, PointField, StringMsg, Twist, Vector3};
+use shieldnav_ros2::params::{RawParams, Value};
+use shieldnav_ros2::ros::{advertise, command_out_qos, context, sensor_qos, spawn, subscribe};
+
+const BEAMS: usize = 1024;
+
+fn wall_scan(d: f64) -> LaserScan {
+    let a0 = -std::f32::consts::PI;
+    let da = 2.0 * std::f32::consts::PI / BEAMS as f32;
+    let ranges = (0..BEAMS)
+        .map(|i| {
+            let a = (a0 + i as f32 * da) as f64;
+            if a.cos() > 0.05 {
+                (d / a.cos()).min(1e3) as f32
+            } else {
+                f32::INFINITY
+            }
+        })
+        .collect();
+    LaserScan {
+        header: Header { frame_id: "laser".into(), ..Default::default() },
+        angle_min: a0,
+        angle_max: a0 + (BEAMS - 1) as f32 * da,
+        angle_increment: da,
+        range_min: 0.05,
+        range_max: 30.0,
+        ranges,
+        ..Default::default()
+    }
+}
+
+fn forward(v: f64) -> Twist {
+    Twist { linear: Vector3 { x: v, y: 0.0, z: 0.0 }, angular: Vector3::default() }
+}
+
+/// A wall of points across the path at `x = d`, 1 m wide, at two heights (`x`, `y`, `z` float32).
+fn wall_cloud(d: f32) -> PointCloud2 {
+    let field = |name: &str, offset| PointField { name: name.into(), offset, datatype: PointField::FLOAT32, count: 1 };
+    let mut data = Vec::new();
+    let mut n = 0;
+    for k in -20..=20 {
+        for z in [0.1f32, 0.5] {
+            for v in [d, k as f32 * 0.025, z] {
+                data.extend_from_slice(&v.to_le_bytes());
+            }
+            n += 1;
+        }
+    }
+    PointCloud2 {
+        header: Header { frame_id: "lidar".into(), ..Default::default() },
+        height: 1,
+        width: n,
+        fields: vec![field("x", 0), field("y", 4), field("z", 8)],
+        is_bigendian: false,
+        point_step: 12,
+        row_step: 12 * n,
+        data,
+        is_dense: true,
+    }
+}
+
+struct Fake {
+    scan: Publisher<LaserScan>,
+    cloud: Publisher<PointCloud2>,
+    bad_scan: Publisher<Twist>,
+    odom: Publisher<Odometry>,
+    nominal: Publisher<Twist>,
+    cmd: Subscription<Twist>,
+    state: Subscription<StringMsg>,
+    last_cmd: Option<Twist>,
+}
+
+impl Fake {
+    /// Reads what arrived; returns the states (as JSON values) in order.
+    fn drain(&mut self) -> Vec<serde_json::Value> {
+        while let Ok(Some((c, _))) = self.cmd.take() {
+            self.last_cmd = Some(c);
+        }
+        let mut out = Vec::new();
+        while let Ok(Some((s, _))) = self.state.take() {
+            out.push(serde_json::from_str(&s.data).expect("the state is JSON"));
+        }
+        out
+    }
+
+    /// Publishes with `send` every 20 ms until `until` accepts a state, or `timeout`.
+    fn until(&mut self, what: &str, timeout: Duration, mut send: impl FnMut(&Fake), until: impl Fn(&serde_json::Value) -> bool) -> serde_json::Value {
+        let start = Instant::now();
+        let mut last = None;
+        while start.elapsed() < timeout {
+            send(self);
+            std::thread::sleep(Duration::from_millis(20));
+            for s in self.drain() {
+                if until(&s) {
+                    return s;
+                }
+                last = Some(s);
+            }
+        }
+        panic!("{what}: no such state within {timeout:?}; last state {last:?}");
+    }
+}
+
+fn reason(s: &serde_json::Value) -> &str {
+    s["reason"].as_str().unwrap_or("")
+}
+
+#[test]
+fn the_node_over_loopback_dds() {
+    // a domain of this process's own: parallel test runs on the host do not meet
+    let domain = 100 + (std::process::id() % 100) as i64;
+    let mut raw = RawParams::default();
+    raw.set("domain_id", Value::Int(domain)).set("method", Value::Str("braking".into()));
+    raw.set("scan_timeout", Value::Float(0.5)).set("command_timeout", Value::Float(0.5)).set("watchdog_rate", Value::Float(20.0));
+    raw.set("cloud_topic", Value::Str("/points".into()));
+    let node = spawn(raw.build().expect("parameters")).expect("the node starts");
+
+    let ctx = context(domain as u16).expect("participant");
+    let mut n = ctx.new_node(NodeName::new("/", "fake_robot").unwrap(), NodeOptions::new().enable_rosout(false)).expect("node");
+    let mut fake = Fake {
+        scan: advertise(&mut n, "/scan", "sensor_msgs", "LaserScan", sensor_qos()).unwrap(),
+        bad_scan: advertise(&mut n, "/scan", "sensor_msgs", "LaserScan", sensor_qos()).unwrap(),
+        cloud: advertise(&mut n, "/points", "sensor_msgs", "PointCloud2", sensor_qos()).unwrap(),
+        odom: advertise(&mut n, "/odom", "nav_msgs", "Odometry", sensor_qos()).unwrap(),
+        nominal: advertise(&mut n, "/cmd_vel_nominal", "geometry_msgs", "Twist", command_out_qos()).unwrap(),
+        cmd: subscribe(&mut n, "/cmd_vel", "geometry_msgs", "Twist", command_out_qos()).unwrap(),
+        state: subscribe(&mut n, "/shieldnav/state", "std_msgs", "String", command_out_qos()).unwrap(),
+        last_cmd: None,
+    };
+    let free = wall_scan(50.0);
+    let wall = wall_scan(1.0);
+
+    // discovery, then free space: the command passes (generous: discovery can take seconds)
+    let s = fake.until(
+        "free space passes",
+        Duration::from_secs(60),
+        |f| {
+            let _ = f.scan.publish(free.clone());
+            let _ = f.odom.publish(Odometry::default());
+            let _ = f.nominal.publish(forward(0.5));
+        },
+        |s| s["ok"] == true,
+    );
+    assert!((s["command"][0].as_f64().unwrap() - 0.5).abs() < 1e-9, "{s}");
+
+    // a wall 1 m ahead: the forward command is stopped
+    let s = fake.until(
+        "a wall ahead",
+        Duration::from_secs(20),
+        |f| {
+            let _ = f.scan.publish(wall.clone());
+            let _ = f.odom.publish(Odometry::default());
+            let _ = f.nominal.publish(forward(1.0));
+        },
+        |s| s["ok"] == true && s["nominal"][0] == 1.0 && s["points_used"].as_u64().unwrap_or(0) > 0,
+    );
+    assert!(s["command"][0].as_f64().unwrap() < 0.25, "forward at a wall: {s}");
+    assert_eq!(s["active"], true);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while fake.last_cmd.is_none_or(|c| c.linear.x >= 0.25) && Instant::now() < deadline {
+        let _ = fake.nominal.publish(forward(1.0));
+        let _ = fake.scan.publish(wall.clone());
+        let _ = fake.odom.publish(Odometry::default());
+        std::thread::sleep(Duration::from_millis(20));
+        fake.drain();
+    }
+    assert!(fake.last_cmd.unwrap().linear.x < 0.25, "the robot hears the stop: {:?}", fake.last_cmd);
+
+    // the scan stops coming: zero, "stale scan"
+    let s = fake.until(
+        "a stale scan",
+        Duration::from_secs(20),
+        |f| {
+            let _ = f.odom.publish(Odometry::default());
+            let _ = f.nominal.publish(forward(0.5));
+        },
+        |s| reason(s).contains("stale scan"),
+    );
+    assert_eq!(s["ok"], false);
+    assert_eq!(s["command"], serde_json::json!([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+
+    // a malformed scan (NaN angles): rejected, zero
+    let mut nan = free.clone();
+    nan.angle_min = f32::NAN;
+    let s = fake.until(
+        "a malformed scan",
+        Duration::from_secs(20),
+        |f| {
+            let _ = f.scan.publish(nan.clone());
+            let _ = f.odom.publish(Odometry::default());
+            let _ = f.nominal.publish(forward(0.5));
+        },
+        |s| reason(s).contains("scan rejected"),
+    );
+    assert!(reason(&s).contains("not finite"), "{s}");
+
+    // bytes that are not a LaserScan at all (a Twist on the scan topic): rejected, zero
+    let s = fake.until(
+        "an undecodable scan",
+        Duration::from_secs(20),
+        |f| {
+            let _ = f.bad_scan.publish(forward(0.1));
+            let _ = f.odom.publish(Odometry::default());
+            let _ = f.nominal.publish(forward(0.5));
+        },
+        |s| s["ok"] == false && reason(s).contains("scan rejected"),
+    );
+    assert_eq!(s["command"][0], 0.0);
+
+    // a point cloud instead of the scan: read by field name, a wall ahead stops the robot
+    let cloud = wall_cloud(1.0);
+    let s = fake.until(
+        "a point cloud",
+        Duration::from_secs(20),
+        |f| {
+            let _ = f.cloud.publish(cloud.clone());
+            let _ = f.odom.publish(Odometry::default());
+            let _ = f.nominal.publish(forward(1.0));
+        },
+        |s| s["ok"] == true && s["scan_frame"] == "lidar",
+    );
+    assert_eq!(s["points_in_scan"], 82, "{s}");
+    assert!(s["command"][0].as_f64().unwrap() < 0.25, "forward at a wall of points: {s}");
+
+    // the planner goes quiet: the watchdog sends zero, "stale nominal command"
+    let s = fake.until(
+        "a missing command",
+        Duration::from_secs(20),
+        |f| {
+            let _ = f.scan.publish(free.clone());
+            let _ = f.odom.publish(Odometry::default());
+        },
+        |s| reason(s).contains("stale nominal command"),
+    );
+    assert_eq!(s["ok"], false);
+    let _ = fake.drain();
+    drop(fake);
+    node.stop().expect("the node stops cleanly");
+}
