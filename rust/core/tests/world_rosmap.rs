@@ -349,6 +349,11 @@ fn malformed_files_name_file_and_field() {
     std::fs::write(d.join("cut.yaml"), "image: cut.png\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
     let e = load_ros_map(d.join("cut.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
     assert!(e.contains("cut.png: PNG data: "), "{e}");
+    // an image of no pixel (a PPM declaring 0 x 0, found by the fuzzer) names the file
+    std::fs::write(d.join("empty.pgm"), b"P6\n0 0\n255\n").unwrap();
+    std::fs::write(d.join("empty.yaml"), "image: empty.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n").unwrap();
+    let e = load_ros_map(d.join("empty.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("empty.pgm: header: size 0 x 0"), "{e}");
     let e = load_ros_map(d.join("nope.yaml"), &RosMapOptions::default()).unwrap_err().to_string();
     assert!(e.contains("nope.yaml: file"), "{e}");
     // a map beyond the coordinates a scenario may use names its file and the field that put it there

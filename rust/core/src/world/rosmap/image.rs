@@ -71,6 +71,9 @@ fn read_image(bytes: &[u8], path: &Path) -> Result<GreyImage> {
     let decoder = reader.into_decoder().map_err(bad)?;
     let (w, h) = decoder.dimensions();
     let (w, h) = (w as usize, h as usize);
+    if w == 0 || h == 0 {
+        return Err(header(format!("size {w} x {h}: a map image has at least one pixel")));
+    }
     if w.saturating_mul(h) > MAX_IMAGE_PIXELS {
         return Err(header(format!("size {w} x {h}: more than the {MAX_IMAGE_PIXELS} pixels a map image may have")));
     }
