@@ -8,7 +8,7 @@
 # Usage: ./scripts/fuzz.sh            (installs into .venv-test as ./scripts/test.sh does)
 #        FUZZ_NO_INSTALL=1 ./scripts/fuzz.sh   (the active Python, shieldnav importable)
 # Environment:
-#   FUZZ_PY_EXAMPLES   hypothesis examples per Python test (default 8000; the map-file tests
+#   FUZZ_PY_EXAMPLES   hypothesis examples per Python test (default 1000; the map-file tests
 #                      and MapInspection's keywords, a map load each, run a tenth of them)
 #   FUZZ_RUST_CASES    PROPTEST_CASES per Rust test (default 200000; the map-image test runs a
 #                      twentieth, the PGM-header test a quarter)
@@ -27,7 +27,7 @@ if [ -z "${FUZZ_NO_INSTALL:-}" ]; then
 fi
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
-PY_EXAMPLES="${FUZZ_PY_EXAMPLES:-8000}"
+PY_EXAMPLES="${FUZZ_PY_EXAMPLES:-1000}"
 RUST_CASES="${FUZZ_RUST_CASES:-200000}"
 LOGS="$(mktemp -d)"
 start=$SECONDS

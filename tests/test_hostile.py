@@ -117,3 +117,13 @@ def test_a_robot_too_wide_for_the_start_names_robot_width():
 def test_a_method_of_no_string_names_method(method):
     with pytest.raises(InvalidArgumentError, match="invalid `method`"):
         Shield(method=method)
+
+
+def test_a_yaw_rate_limit_beyond_the_body_rate_limit_names_w_max():
+    import gymnasium as gym
+
+    # (the env's rotation command reaches w_max, which the shield refuses beyond 1e4 rad/s)
+    with pytest.raises(InvalidArgumentError, match="invalid `w_max`"):
+        gym.make("shieldnav/OdometryJump-v0", w_max=14370)
+    with pytest.raises(InvalidArgumentError, match="invalid `w_max`"):
+        Shield(method="braking", w_max=2e4)

@@ -43,6 +43,13 @@ impl TrackerConfig {
                 return Err(Error::invalid(name, format!("must be finite and > 0, got {v}")));
             }
         }
+        // (the shield refuses body rates beyond it: a command at these limits must pass)
+        let limit = crate::shield::MAX_BODY_RATE;
+        for (name, v) in [("v_max", self.v_max[0]), ("v_max", self.v_max[1]), ("w_max", self.w_max)] {
+            if v > limit {
+                return Err(Error::invalid(name, format!("must be at most {limit} (the shield's MAX_BODY_RATE), got {v}")));
+            }
+        }
         Ok(())
     }
 }
