@@ -31,7 +31,7 @@ from typing import Any, Callable
 import gymnasium as gym
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, assume, given, settings
+from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 from shieldnav import ENV_DEFAULTS, ENV_IDS, Shield, World
 from shieldnav.exceptions import InvalidArgumentError, MapFileError
@@ -402,22 +402,6 @@ _ENV_KEYS.update(
 )
 
 
-def _known_make_failure(env_id: str, kwargs: dict[str, Any]) -> bool:
-    """An input of a known failure whose fix lies outside this package's Python code (see
-    `XFAIL`): a ROS-map keyword given as a numpy array on a site of no map, or `site_kind` on a
-    site not procedural (their `==` against the default is an array, whose truth value is a
-    bare `ValueError`)."""
-    keys = [] if env_id == "shieldnav/MapInspection-v0" else ["simplify", "unknown_is_wall", "unreachable_walls"]
-    if env_id != "shieldnav/CorridorInspection-v0":
-        keys.append("site_kind")
-    if any(isinstance(kwargs.get(k), np.ndarray) for k in keys):
-        return True
-    # `lidar_min_range` at or beyond the default `lidar_max_range` (20 m) is refused naming
-    # `lidar_max_range` (the core's LIDAR check and rust/py/src/config.rs name it)
-    low = kwargs.get("lidar_min_range")
-    return "lidar_max_range" not in kwargs and isinstance(low, (int, float)) and not isinstance(low, bool) and low >= 20
-
-
 def _env_kwargs(env_id: str) -> st.SearchStrategy[dict[str, Any]]:
     keys = dict(_ENV_KEYS)
     if env_id != "shieldnav/MapInspection-v0":
@@ -452,7 +436,6 @@ def test_make_keywords(env_id):
     @_short(12, 10) if env_id == "shieldnav/MapInspection-v0" else _short(30)
     @given(kwargs=_env_kwargs(env_id))
     def inner(kwargs):
-        assume(not _known_make_failure(env_id, kwargs))
         _run("test_make_keywords", check_make, env_id=env_id, kwargs=kwargs)
 
     inner()
@@ -663,22 +646,11 @@ _CHECKS = {
     "test_map_pgm_headers": check_map_pgm,
 }
 #: Saved inputs whose fix lies outside this package's Python and shield code: name → reason.
-XFAIL: dict[str, str] = {
-    "test_make_keywords-1b0641a483.repr": "rust/py/src/config.rs (SiteArgs::check_keys) compares a ROS-map keyword with its default by `==`, "
-    "whose array result's truth value is a bare ValueError",
-    "test_make_keywords-site_kind.repr": "rust/py/src/config.rs (SiteArgs::check_keys) compares `site_kind` with its default by `==`, "
-    "whose array result's truth value is a bare ValueError",
-    "test_make_keywords-lidar_min_range.repr": "rust/core/src/sensors (LidarConfig::validate) refuses min_range >= max_range as `max_range`, "
-    "which rust/py/src/config.rs names `lidar_max_range`: a key not given",
-}
-
-
 def _saved() -> list[Any]:
     out = []
     for path in sorted(REGRESSIONS.glob("*.repr")):
         test = path.name.rsplit("-", 1)[0]
-        marks = [pytest.mark.xfail(strict=True, reason=XFAIL[path.name])] if path.name in XFAIL else []
-        out.append(pytest.param(path, test, id=path.name, marks=marks))
+        out.append(pytest.param(path, test, id=path.name))
     return out
 
 

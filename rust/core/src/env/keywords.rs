@@ -336,6 +336,11 @@ pub fn episode_config(kwargs: &[(String, Value)]) -> Result<(EpisodeConfig, Site
     if c.world.lidar.channels == 1 && c.world.lidar.vertical_fov != EpisodeConfig::default().world.lidar.vertical_fov {
         return Err(Error::invalid("lidar_vertical_fov", "applies to multi-channel LIDARs (lidar_channels > 1); a planar ring has none"));
     }
+    // (the LIDAR's own check names `max_range` for the pair: name the one of the two given)
+    let (lo, hi) = (c.world.lidar.min_range, c.world.lidar.max_range);
+    if lo.is_finite() && hi.is_finite() && lo >= hi && given.contains(&"lidar_min_range") && !given.contains(&"lidar_max_range") {
+        return Err(Error::invalid("lidar_min_range", format!("must be below lidar_max_range ({hi} m), got {lo}")));
+    }
     c.world.lidar.validate().map_err(|e| keyed(e, &given))?;
     // (scans are taken at control steps: a faster rate would be capped silently)
     if c.world.dt.is_finite() && c.world.dt > 0.0 {
@@ -429,6 +434,7 @@ mod tests {
         assert!(err("no_such_key", Value::None).contains("unknown keyword argument `no_such_key`"));
         assert!(err("semi_axes", Value::Str("x".into())).contains("expected a sequence"));
         assert!(err("lidar_mount", Value::List(vec![Value::Float(0.0)])).contains("(x, y, z, yaw)"));
+        assert!(err("lidar_min_range", Value::Int(20)).contains("invalid `lidar_min_range`: must be below lidar_max_range"));
     }
 
     #[test]
