@@ -9,41 +9,28 @@
 //! and 99th percentiles, the node's own time (message in to command out, without DDS), and
 //! the shield's time alone.
 
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use common::{ring_scan, BEAMS};
 use std::time::{Duration, Instant};
 
 use futures::{FutureExt, StreamExt};
 use ros2_client::{NodeName, NodeOptions};
-use shieldnav_ros2::msg::{Header, LaserScan, Odometry, StringMsg, Twist, Vector3};
+use shieldnav_ros2::msg::{LaserScan, Odometry, StringMsg, Twist, Vector3};
 use shieldnav_ros2::params::{RawParams, Value};
 use shieldnav_ros2::ros::{advertise, command_out_qos, context, sensor_qos, spawn, subscribe};
 use shieldnav_ros2::ShieldNode;
 
-const BEAMS: usize = 1024;
-
 /// A 1024-beam 360° scan of a corridor 2 m wide, `shift` moving the walls a little so that
 /// no two scans are equal.
 fn corridor(shift: f64) -> LaserScan {
-    let a0 = -std::f32::consts::PI;
-    let da = 2.0 * std::f32::consts::PI / BEAMS as f32;
-    let ranges = (0..BEAMS)
-        .map(|i| {
-            let a = (a0 + i as f32 * da) as f64;
-            let (s, c) = a.sin_cos();
-            let side = if s.abs() > 1e-6 { (1.0 + shift) / s.abs() } else { f64::INFINITY };
-            let end = if c > 1e-6 { 4.0 / c } else { f64::INFINITY };
-            side.min(end).min(30.0) as f32
-        })
-        .collect();
-    LaserScan {
-        header: Header { frame_id: "laser".into(), ..Default::default() },
-        angle_min: a0,
-        angle_max: a0 + (BEAMS - 1) as f32 * da,
-        angle_increment: da,
-        range_min: 0.05,
-        range_max: 30.0,
-        ranges,
-        ..Default::default()
-    }
+    ring_scan(30.0, |a| {
+        let (s, c) = a.sin_cos();
+        let side = if s.abs() > 1e-6 { (1.0 + shift) / s.abs() } else { f64::INFINITY };
+        let end = if c > 1e-6 { 4.0 / c } else { f64::INFINITY };
+        side.min(end).min(30.0) as f32
+    })
 }
 
 fn percentile(sorted: &[f64], q: f64) -> f64 {

@@ -1,44 +1,14 @@
 //! The node's decisions without the network: translation, fail-safe and parameters.
 
+mod common;
+
+use common::{forward, ring_scan, wall_scan, BEAMS};
 use std::time::{Duration, Instant};
 
-use shieldnav_ros2::msg::{Header, LaserScan, Odometry, PointCloud2, PointField, Twist, Vector3};
+use shieldnav_ros2::msg::{Header, LaserScan, Odometry, PointCloud2, PointField, Twist};
 use shieldnav_ros2::params::{RawParams, Value};
 use shieldnav_ros2::translate::{laser_scan_points, point_cloud_points, Mount};
 use shieldnav_ros2::{Output, ShieldNode};
-
-const BEAMS: usize = 1024;
-
-/// A 360° scan of `BEAMS` beams (first beam at −π) seeing a wall across the robot's path at
-/// `x = d` (nothing else).
-fn wall_scan(d: f64) -> LaserScan {
-    let a0 = -std::f32::consts::PI;
-    let da = 2.0 * std::f32::consts::PI / BEAMS as f32;
-    let ranges = (0..BEAMS)
-        .map(|i| {
-            let a = (a0 + i as f32 * da) as f64;
-            if a.cos() > 0.05 {
-                (d / a.cos()).min(1e3) as f32
-            } else {
-                f32::INFINITY
-            }
-        })
-        .collect();
-    LaserScan {
-        header: Header { frame_id: "laser".into(), ..Default::default() },
-        angle_min: a0,
-        angle_max: a0 + (BEAMS - 1) as f32 * da,
-        angle_increment: da,
-        range_min: 0.05,
-        range_max: 30.0,
-        ranges,
-        ..Default::default()
-    }
-}
-
-fn forward(v: f64) -> Twist {
-    Twist { linear: Vector3 { x: v, y: 0.0, z: 0.0 }, angular: Vector3::default() }
-}
 
 fn at_rest() -> Odometry {
     Odometry::default()
@@ -350,43 +320,30 @@ fn the_example_parameter_file_holds_the_defaults() {
 /// A 1024-beam scan from `x` on the axis of a corridor 2 m wide, closed 6 m ahead of the start
 /// and 3 m behind: range noise of ±1 cm, every 37th beam a NaN dropout, 8 m range.
 fn corridor_scan(x: f64, seed: &mut u64) -> LaserScan {
-    let a0 = -std::f32::consts::PI;
-    let da = 2.0 * std::f32::consts::PI / BEAMS as f32;
-    let ranges = (0..BEAMS)
-        .map(|i| {
-            if i % 37 == 0 {
-                return f32::NAN;
-            }
-            let a = (a0 + i as f32 * da) as f64;
-            let (s, c) = a.sin_cos();
-            let mut r = f64::INFINITY;
-            if s.abs() > 1e-9 {
-                r = r.min(1.0 / s.abs());
-            }
-            if c > 1e-9 {
-                r = r.min((6.0 - x) / c);
-            } else if c < -1e-9 {
-                r = r.min((x + 3.0) / -c);
-            }
-            *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            let noise = ((*seed >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.02;
-            if r > 8.0 {
-                f32::INFINITY
-            } else {
-                (r + noise) as f32
-            }
-        })
-        .collect();
-    LaserScan {
-        header: Header { frame_id: "laser".into(), ..Default::default() },
-        angle_min: a0,
-        angle_max: a0 + (BEAMS - 1) as f32 * da,
-        angle_increment: da,
-        range_min: 0.05,
-        range_max: 8.0,
-        ranges,
-        ..Default::default()
-    }
+    let mut beam = 0usize;
+    ring_scan(8.0, |a| {
+        beam += 1;
+        if (beam - 1).is_multiple_of(37) {
+            return f32::NAN;
+        }
+        let (s, c) = a.sin_cos();
+        let mut r = f64::INFINITY;
+        if s.abs() > 1e-9 {
+            r = r.min(1.0 / s.abs());
+        }
+        if c > 1e-9 {
+            r = r.min((6.0 - x) / c);
+        } else if c < -1e-9 {
+            r = r.min((x + 3.0) / -c);
+        }
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let noise = ((*seed >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.02;
+        if r > 8.0 {
+            f32::INFINITY
+        } else {
+            (r + noise) as f32
+        }
+    })
 }
 
 #[test]

@@ -3,43 +3,15 @@
 //! over RustDDS's same-host loopback unicast (and multicast where the network has it), on a
 //! domain of its own.
 
+mod common;
+
+use common::{forward, wall_scan};
 use std::time::{Duration, Instant};
 
 use ros2_client::{NodeName, NodeOptions, Publisher, Subscription};
-use shieldnav_ros2::msg::{Header, LaserScan, Odometry, PointCloud2, PointField, StringMsg, Twist, Vector3};
+use shieldnav_ros2::msg::{Header, LaserScan, Odometry, PointCloud2, PointField, StringMsg, Twist};
 use shieldnav_ros2::params::{RawParams, Value};
 use shieldnav_ros2::ros::{advertise, command_out_qos, context, sensor_qos, spawn, subscribe};
-
-const BEAMS: usize = 1024;
-
-fn wall_scan(d: f64) -> LaserScan {
-    let a0 = -std::f32::consts::PI;
-    let da = 2.0 * std::f32::consts::PI / BEAMS as f32;
-    let ranges = (0..BEAMS)
-        .map(|i| {
-            let a = (a0 + i as f32 * da) as f64;
-            if a.cos() > 0.05 {
-                (d / a.cos()).min(1e3) as f32
-            } else {
-                f32::INFINITY
-            }
-        })
-        .collect();
-    LaserScan {
-        header: Header { frame_id: "laser".into(), ..Default::default() },
-        angle_min: a0,
-        angle_max: a0 + (BEAMS - 1) as f32 * da,
-        angle_increment: da,
-        range_min: 0.05,
-        range_max: 30.0,
-        ranges,
-        ..Default::default()
-    }
-}
-
-fn forward(v: f64) -> Twist {
-    Twist { linear: Vector3 { x: v, y: 0.0, z: 0.0 }, angular: Vector3::default() }
-}
 
 /// A wall of points across the path at `x = d`, 1 m wide, at two heights (`x`, `y`, `z` float32).
 fn wall_cloud(d: f32) -> PointCloud2 {
