@@ -46,7 +46,7 @@ def test_inside_the_ellipse_it_recovers_away_from_the_point():
 
 @pytest.mark.parametrize(
     "kwargs, name",
-    [({"tracker_tau": -1.0}, "tracker_tau"), ({"dt": 0.0}, "dt"), ({"brake_margin": -0.1}, "margin"),
+    [({"tracker_tau": -1.0}, "tracker_tau"), ({"dt": 0.0}, "dt"), ({"brake_margin": -0.1}, "brake_margin"),
      ({"yaw_accel_max": 0.0}, "yaw_accel_max"), ({"w_max": float("nan")}, "w_max"), ({"method": "brake"}, "method")],
 )
 def test_bad_parameters_name_themselves(kwargs, name):

@@ -425,7 +425,7 @@ fn braking_inputs_name_the_argument() {
     let d = BrakingModel::default();
     assert!(bad(BrakingModel { dt: 0.0, ..d }).contains("dt"));
     assert!(bad(BrakingModel { dt: f64::NAN, ..d }).contains("dt"));
-    assert!(bad(BrakingModel { margin: -0.1, ..d }).contains("margin"));
+    assert!(bad(BrakingModel { brake_margin: -0.1, ..d }).contains("`brake_margin`"));
     let mut t = d.tracker;
     t.alpha_max = 0.0;
     assert!(bad(BrakingModel { tracker: t, ..d }).contains("yaw_accel_max"));

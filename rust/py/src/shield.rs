@@ -125,7 +125,7 @@ impl PyShield {
         w_max = TrackerConfig::default().w_max,
         yaw_accel_max = TrackerConfig::default().alpha_max,
         dt = BrakingModel::default().dt,
-        brake_margin = BrakingModel::default().margin,
+        brake_margin = BrakingModel::default().brake_margin,
         rotation_weight = ShieldConfig::default().rotation_weight,
     ))]
     #[allow(clippy::too_many_arguments)]
@@ -165,10 +165,10 @@ impl PyShield {
             safety_distance,
             scan: ScanFilter { crop_radius, height_band, voxel_size, angular_bins },
             grad_eps,
-            braking: BrakingModel { tracker, dt, margin: brake_margin },
+            braking: BrakingModel { tracker, dt, brake_margin },
             rotation_weight,
         };
-        Ok(Self { inner: Shield::new(config).map_err(|e| to_py(python_names(e)))? })
+        Ok(Self { inner: Shield::new(config).map_err(to_py)? })
     }
 
     /// filter(points, u_nom, yaw=None, omega=None, rotation=None, extra_A=None, extra_b=None,
@@ -254,15 +254,6 @@ impl PyShield {
 /// `method`, a string, else an `InvalidArgumentError` naming it.
 fn method_arg(obj: &Bound<'_, PyAny>) -> PyResult<String> {
     obj.extract::<String>().map_err(|_| invalid("method", format!("expected a method name (str), got {}", obj.repr().map(|r| r.to_string()).unwrap_or_default())))
-}
-
-/// A core error about a configuration field, named by the constructor's keyword for it (the
-/// braking model's `margin` is `brake_margin`).
-fn python_names(err: shieldnav_core::Error) -> shieldnav_core::Error {
-    match err {
-        shieldnav_core::Error::InvalidArgument { name: "margin", reason } => shieldnav_core::Error::InvalidArgument { name: "brake_margin", reason },
-        other => other,
-    }
 }
 
 impl PyShield {
@@ -399,7 +390,7 @@ fn config_dict<'py>(py: Python<'py>, c: &ShieldConfig) -> PyResult<Bound<'py, Py
     d.set_item("w_max", c.braking.tracker.w_max)?;
     d.set_item("yaw_accel_max", c.braking.tracker.alpha_max)?;
     d.set_item("dt", c.braking.dt)?;
-    d.set_item("brake_margin", c.braking.margin)?;
+    d.set_item("brake_margin", c.braking.brake_margin)?;
     d.set_item("rotation_weight", c.rotation_weight)?;
     Ok(d)
 }

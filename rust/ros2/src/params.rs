@@ -352,7 +352,7 @@ impl RawParams {
             safety_distance: g.float("safety_distance", d.safety_distance)?,
             scan: ScanFilter { crop_radius: g.opt_float("crop_radius", d.scan.crop_radius)?, height_band, voxel_size: g.opt_float("voxel_size", d.scan.voxel_size)?, angular_bins },
             grad_eps: g.float("grad_eps", d.grad_eps)?,
-            braking: BrakingModel { tracker, dt: g.float("dt", braking_default.dt)?, margin: g.float("brake_margin", braking_default.margin)? },
+            braking: BrakingModel { tracker, dt: g.float("dt", braking_default.dt)?, brake_margin: g.float("brake_margin", braking_default.brake_margin)? },
             rotation_weight: g.float("rotation_weight", d.rotation_weight)?,
         };
         // the core's checks, whose errors name the field (its names are the parameters')
@@ -426,10 +426,9 @@ impl RawParams {
     }
 }
 
-/// The parameter a core error names (the core's field names are the parameters' but for two).
+/// The parameter a core error names (the core's field names are the parameters' but for one).
 fn parameter_of(field: &str) -> &str {
     match field {
-        "margin" => "brake_margin",
         "v_max" => "u_max",
         f => f,
     }

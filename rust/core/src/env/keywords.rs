@@ -179,7 +179,7 @@ macro_rules! each_field {
         $f!("voxel_size", shield.scan.voxel_size);
         $f!("angular_bins", shield.scan.angular_bins);
         $f!("grad_eps", shield.grad_eps);
-        $f!("brake_margin", shield.braking.margin);
+        $f!("brake_margin", shield.braking.brake_margin);
         $f!("rotation_weight", shield.rotation_weight);
         $f!("d_view", planner.d_view);
         $f!("gamma_h", planner.gamma_h);

@@ -13,7 +13,7 @@
 //! 2. Cover the ellipse along that path by one convex set: the ellipse turned to the path's
 //!    middle heading `θ_ref`, grown by `ρ` (the path's largest distance `δ` from its chord
 //!    `P₀P_M`, plus `2 r sin(φ/2)` for a turn of at most `φ` either side of `θ_ref`, `r` the
-//!    longest semi-axis, plus the [`BrakingModel::margin`]), swept along the chord. A disc of radius `ρ` added to an ellipse lies
+//!    longest semi-axis, plus the [`BrakingModel::brake_margin`]), swept along the chord. A disc of radius `ρ` added to an ellipse lies
 //!    inside the ellipse with semi-axes [`grow`]`(a, b, ρ)`.
 //! 3. The check value is the least `h` of the points against that swept ellipse, in closed
 //!    form per point: with `q` and `S = P_M` in the `θ_ref` frame and `Q` the grown ellipse's
@@ -55,12 +55,12 @@ pub struct BrakingModel {
     pub dt: f64,
     /// Clearance (m) the check keeps beyond the swept ellipse, for what the scan does not
     /// show exactly: range noise (3σ of the default LIDAR's 1 cm) and the gaps between beams.
-    pub margin: f64,
+    pub brake_margin: f64,
 }
 
 impl Default for BrakingModel {
     fn default() -> Self {
-        Self { tracker: TrackerConfig::default(), dt: 0.02, margin: 0.03 }
+        Self { tracker: TrackerConfig::default(), dt: 0.02, brake_margin: 0.03 }
     }
 }
 
@@ -71,8 +71,8 @@ impl BrakingModel {
         if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= 1.0) {
             return Err(Error::invalid("dt", format!("the control period must be in (0, 1] s, got {}", self.dt)));
         }
-        if !(self.margin.is_finite() && (0.0..=10.0).contains(&self.margin)) {
-            return Err(Error::invalid("margin", format!("must be from 0 to 10 m, got {}", self.margin)));
+        if !(self.brake_margin.is_finite() && (0.0..=10.0).contains(&self.brake_margin)) {
+            return Err(Error::invalid("brake_margin", format!("must be from 0 to 10 m, got {}", self.brake_margin)));
         }
         Ok(())
     }
@@ -133,10 +133,10 @@ impl BrakingModel {
         let heading = 0.5 * (th_lo + th_hi);
         let half_turn = (0.5 * (th_hi - th_lo) + turn).min(std::f64::consts::PI);
         let r = semi_axes[0].max(semi_axes[1]);
-        let rho = delta + 2.0 * r * (0.5 * half_turn).sin() + self.margin;
+        let rho = delta + 2.0 * r * (0.5 * half_turn).sin() + self.brake_margin;
         let grown = grow(semi_axes[0], semi_axes[1], rho);
         let (s, c) = heading.sin_cos();
-        Sweep { chord: [c * end[0] + s * end[1], -s * end[0] + c * end[1]], heading, semi_axes: grown, growth: rho, here: grow(semi_axes[0], semi_axes[1], self.margin), first_velocity, steps }
+        Sweep { chord: [c * end[0] + s * end[1], -s * end[0] + c * end[1]], heading, semi_axes: grown, growth: rho, here: grow(semi_axes[0], semi_axes[1], self.brake_margin), first_velocity, steps }
     }
 }
 
@@ -295,7 +295,7 @@ mod tests {
 
     #[test]
     fn a_straight_brake_from_full_speed_ends_where_the_tracker_stops() {
-        let model = BrakingModel { margin: 0.0, ..BrakingModel::default() };
+        let model = BrakingModel { brake_margin: 0.0, ..BrakingModel::default() };
         let sw = model.sweep([1.6, 0.0, 0.0], [1.6, 0.0, 0.0], [0.9, 0.45]);
         // replay the tracker itself: one period of the command, then the brake
         let mut t = crate::robot::Tracker::new(model.tracker).unwrap();
