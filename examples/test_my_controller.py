@@ -41,3 +41,19 @@ def test_one_environment(shieldnav_env):
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(my_controller(obs, info))
     assert not info["collision"]
+
+
+class MyBatchController:
+    """The same controller over a batch of observations ``(n, L)``: ``run_episodes`` then runs
+    every seed of an id as one native batch (``act_batch``), one policy call per step."""
+
+    def act_batch(self, obs, info):
+        left, right = obs[:, 8:24].min(axis=1), obs[:, 40:56].min(axis=1)
+        actions = np.zeros((len(obs), 3), dtype=np.float32)
+        actions[:, 0], actions[:, 2] = 0.5, 0.5 * (left - right)
+        return actions
+
+
+def test_a_batch_controller_on_many_seeds(shieldnav_runner):
+    summaries = shieldnav_runner(MyBatchController(), IDS, range(8), max_steps=500)
+    assert_no_contact(summaries)

@@ -108,6 +108,11 @@ def test_lambda_runs_in_process_or_is_a_clear_error():
         (dict(policy="sb3"), "policy"),
         (dict(max_steps=0), "max_steps"),
         (dict(render_mode="rgb_array"), "render_mode"),
+        (dict(vectorised="yes"), "vectorised"),
+        (dict(policy="scripted", vectorised=True), "vectorised"),
+        (dict(vectorised=True, observation="dict"), "vectorised"),
+        (dict(env_ids="no_such_map.yaml"), "env_ids"),
+        (dict(env_ids="notes.txt"), "env_ids"),
     ],
 )
 def test_bad_arguments_are_clear_errors(kwargs, name):
@@ -182,16 +187,37 @@ def test_plugin_fixtures_gif_dir_and_summary(pytester):
     assert (gifs / "ConstrictedPassage-v0-seed1-contact.gif").is_file()
 
 
+def test_plugin_under_pytest_xdist(pytester):
+    pytester.makepyfile(test_user=USER_TESTS)
+    result = pytester.runpytest_subprocess(*_plugin_args(), "-n", "2", "-p", "no:cacheprovider")
+    result.assert_outcomes(passed=2, failed=1)
+    result.stdout.fnmatch_lines(["*2 workers*"])
+    # the controller adds up the workers' counts
+    result.stdout.fnmatch_lines(["shieldnav: 2 episodes run, 1 with a contact, 0 with a deadlock"])
+
+
 def test_an_sb3_like_model_acts_deterministically():
     class Model:
         """What run_episodes reads of an SB3 model: ``predict(obs, deterministic=True) -> (action, state)``."""
 
         def predict(self, obs, deterministic=False):
             assert deterministic
-            return np.array([0.0, 1.0, 0.0], np.float32), None
+            action = np.array([0.0, 1.0, 0.0], np.float32)
+            return (np.tile(action, (len(obs), 1)) if np.ndim(obs) == 2 else action), None
 
-    (row,) = run_episodes(Model(), CP, [0], workers=1, max_steps=100, shield="none")
-    assert row.first_contact_step == 89
+    on_batch = run_episodes(Model(), CP, [0], workers=1, max_steps=100, shield="none")
+    in_process = run_episodes(Model(), CP, [0], workers=1, max_steps=100, shield="none", vectorised=False)
+    assert on_batch.vectorised and list(on_batch) == list(in_process)
+    assert on_batch[0].first_contact_step == 89
+
+
+def test_a_stable_baselines3_model_runs_on_the_batch():
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    model = PPO("MlpPolicy", gym.make("shieldnav/CorridorInspection-v0"), seed=0, device="cpu")
+    table = run_episodes(model, "CorridorInspection-v0", range(3), max_steps=50)
+    assert table.vectorised and [r.steps for r in table] == [50, 50, 50]
 
 
 def test_an_unguarded_script_with_workers_is_a_clear_error(tmp_path):
@@ -201,3 +227,81 @@ def test_an_unguarded_script_with_workers_is_a_clear_error(tmp_path):
     script = "from shieldnav.testing import run_episodes\nrun_episodes('scripted', 'ConstrictedPassage-v0', [0, 1], workers=2, max_steps=3)\n"
     out = subprocess.run([sys.executable, "-"], input=script, capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert out.returncode != 0 and "ShieldnavError" in out.stderr and 'if __name__ == "__main__"' in out.stderr
+
+
+class Steer:
+    """Ahead at 0.8 m/s, turning by the difference of two range bins: elementwise, so its actions
+    on a batch are its actions one observation at a time, bit for bit."""
+
+    def act_batch(self, obs, info):
+        obs = np.atleast_2d(obs)
+        a = np.zeros((obs.shape[0], 3), np.float32)
+        a[:, 0] = 0.8
+        a[:, 2] = obs[:, 16] - obs[:, 48]
+        return a
+
+
+def sideways_batch(obs, info):
+    return np.tile(np.array([0.0, 1.0, 0.0], np.float32), (len(obs), 1))
+
+
+def test_the_native_batch_gives_the_process_path_summaries():
+    ids = [CP, "shieldnav/CorridorInspection-v0"]
+    batch = run_episodes(Steer(), ids, range(3), max_steps=200, workers=1)
+    procs = run_episodes(Steer(), ids, range(3), max_steps=200, workers=2, vectorised=False)
+    two_threads = run_episodes(Steer(), ids, range(3), max_steps=200, workers=2)
+    assert batch.vectorised and two_threads.vectorised and not procs.vectorised
+    assert list(batch) == list(procs) == list(two_threads)
+    assert [(r.env_id, r.seed) for r in batch] == [(e, s) for e in sorted(ids) for s in range(3)]
+
+
+def test_a_forced_batch_policy_fails_naming_seed_step_and_reruns_for_a_gif(tmp_path):
+    table = run_episodes(sideways_batch, CP, [0, 1], max_steps=150, shield="none", vectorised=True, gif_dir=tmp_path)
+    assert table.vectorised and all(r.first_contact_step for r in table)
+    with pytest.raises(AssertionError, match=r"ConstrictedPassage-v0 seed 1: first contact at step \d+") as err:
+        assert_no_contact(table)
+    assert "GIF of" in str(err.value) and list(tmp_path.glob("*.gif"))
+    # the single-environment re-run sees the same episode
+    first = table[0]
+    assert table.rerun(first).first_contact_step == first.first_contact_step
+
+
+def test_a_batch_policy_returning_the_wrong_shape_is_a_clear_error():
+    with pytest.raises(InvalidArgumentError, match=r"invalid `policy`: on a batch of 2 observations .* shape \(3,\)"):
+        run_episodes(zero, CP, [0, 1], max_steps=5, vectorised=True)
+
+
+def test_the_shipped_policy_runs_on_the_batch():
+    table = run_episodes("ppo", "CorridorInspection-v0", range(2), max_steps=100)
+    assert table.vectorised and len(table) == 2 and all(r.steps == 100 for r in table)
+
+
+def test_map_and_scenario_files_as_inputs(tmp_path):
+    from shieldnav.maps import DEFAULT_MAP
+
+    scen = tmp_path / "corridor.json"
+    scen.write_text(
+        '{"name": "mine", "walls": [{"a": [0, -1], "b": [20, -1], "height": 2.0}, {"a": [0, 1], "b": [20, 1], "height": 2.0}],'
+        ' "start": {"x": 2, "y": 0, "yaw": 0}}'
+    )
+    table = run_episodes(sideways, [scen, str(DEFAULT_MAP)], [0], max_steps=60, shield="none", workers=1)
+    by_file = {r.env_id: r for r in table}
+    assert set(by_file) == {str(scen), str(DEFAULT_MAP)}
+    # 1 m from the +y wall, driven at it without a shield
+    assert by_file[str(scen)].first_contact_step is not None
+    with pytest.raises(AssertionError, match=r"corridor.json seed 0: first contact"):
+        assert_no_contact(table)
+    assert [p.id for p in cases([scen], [2])] == ["corridor-seed2"]
+    # the same file on the native batch: the same episode
+    batch = run_episodes(sideways_batch, scen, [0], max_steps=60, shield="none", vectorised=True)
+    assert list(batch) == [by_file[str(scen)]]
+
+
+def test_the_example_test_file_passes(pytester):
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "test_my_controller.py"
+    pytester.makepyfile(test_example=example.read_text())
+    result = pytester.runpytest_subprocess(*_plugin_args(), "-p", "no:cacheprovider")
+    result.assert_outcomes(passed=10)
+    result.stdout.fnmatch_lines(["shieldnav: 31 episodes run, 0 with a contact, 0 with a deadlock"])

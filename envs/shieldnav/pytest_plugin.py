@@ -57,16 +57,14 @@ def pytest_configure(config: pytest.Config) -> None:
 @pytest.fixture
 def shieldnav_env() -> Iterator[Callable[..., Any]]:
     """``make(env_id, **kwargs)``: ``gymnasium.make`` of a shieldnav id (``"ConstrictedPassage-v0"``
-    or ``"shieldnav/ConstrictedPassage-v0"``); every env made is closed at teardown."""
-    import gymnasium as gym
-
-    from shieldnav.testing import _check_env_ids
+    or ``"shieldnav/ConstrictedPassage-v0"``) or of a ROS map (``.yaml``) or scenario (``.json``)
+    file; every env made is closed at teardown."""
+    from shieldnav.testing import make_env
 
     made: list[Any] = []
 
     def make(env_id: str, **kwargs: Any) -> Any:
-        (full,) = _check_env_ids([env_id])
-        env = gym.make(full, **kwargs)
+        env = make_env(env_id, **kwargs)
         made.append(env)
         return env
 

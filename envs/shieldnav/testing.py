@@ -11,9 +11,25 @@
 ``policy`` is a callable ``(obs, info) -> action``, an object with ``act(obs, info)`` (the
 shipped policies), a stable-baselines3 model (``predict``, deterministic actions), or one of the
 names ``"scripted"`` (:class:`shieldnav.InspectionAgent`) and ``"ppo"`` (the shipped PPO policy).
-Episodes run in parallel worker processes (one per available CPU by default); the policy goes to
-each episode as a fresh copy (pickled once, unpickled per episode, in the workers as in this
-process), so the summaries depend on the seeds only: 1 and N workers give the same table.
+``env_ids`` holds registered ids and files: a ROS map_server map (``.yaml``/``.yml``, run as
+``shieldnav/MapInspection-v0`` with ``map_path``) or a JSON scenario file (``.json``, run as
+``shieldnav/CorridorInspection-v0`` with ``scenario_path``).
+
+Two ways to run the episodes, both giving summaries that depend on the seeds only (1 and N
+workers give the same table):
+
+- **the native batch**, for vectorisable policies (a stable-baselines3 model, ``"ppo"``, an
+  object with ``act_batch(obs, info)``, or any policy with ``vectorised=True``): every seed of an
+  id is a sub-environment of one Rust batch (``gymnasium.make_vec``, ``threads=workers``) and
+  the policy acts on the ``(n, L)`` observation batch;
+- **worker processes** otherwise (one per available CPU by default): the policy goes to each
+  episode as a fresh copy (pickled once, unpickled per episode, in the workers as in this
+  process).
+
+Both run the same episodes: sub-environment ``i`` of the batch is the single environment reset
+with seed ``i``'s. Their summaries are equal when the policy's batched actions equal its
+one-by-one actions bit for bit (elementwise policies do; a matrix product may round the last bit
+differently for a batch).
 
 The assertion helpers raise ``AssertionError`` naming env id, seed, step and time of the first
 violation of each failing episode; with ``gif_dir`` they re-run the first failing episode with
@@ -81,8 +97,12 @@ class EpisodeTable(list):  # type: ignore[type-arg]
     """The summaries of :func:`run_episodes` (a list, sorted by env id then seed), remembering
     how they were run so that a failing episode can be re-run (:meth:`rerun`, GIFs)."""
 
-    def __init__(self, rows: Iterable[EpisodeSummary], policy_blob: bytes | None, policy: Any, env_kwargs: dict[str, Any], gif_dir: str | None = None) -> None:
+    def __init__(
+        self, rows: Iterable[EpisodeSummary], policy_blob: bytes | None, policy: Any, env_kwargs: dict[str, Any], gif_dir: str | None = None, vectorised: bool = False
+    ) -> None:
         super().__init__(rows)
+        #: Whether the episodes ran on the native batch (a re-run feeds the policy batches of one).
+        self.vectorised = vectorised
         self._policy_blob = policy_blob
         self._policy = policy
         self.env_kwargs = dict(env_kwargs)
@@ -91,19 +111,47 @@ class EpisodeTable(list):  # type: ignore[type-arg]
 
     def rerun(self, summary: EpisodeSummary, gif_path: str | os.PathLike[str] | None = None, stop_step: int | None = None) -> EpisodeSummary:
         """Runs ``summary``'s episode again (same policy, keywords and seed); with ``gif_path``
-        writes a GIF of it (every 5th step), up to ``stop_step`` if given."""
+        writes a GIF of it (every 5th step), up to ``stop_step`` if given. Episodes of the
+        native batch re-run in a single environment, the policy acting on batches of one."""
         policy = pickle.loads(self._policy_blob) if self._policy_blob is not None else self._policy
+        if self.vectorised:
+            batch_act = _batch_actor(policy)
+            policy = lambda obs, info: np.asarray(batch_act(np.asarray(obs)[None], info))[0]  # noqa: E731
         return _run_one(summary.env_id, summary.seed, policy, self.env_kwargs, gif_path=gif_path, stop_step=stop_step)
 
 
 def _short(env_id: str) -> str:
+    if Path(env_id).suffix.lower() in _FILE_SITES:
+        return Path(env_id).stem
     return env_id.split("/", 1)[-1]
 
 
+#: File suffixes ``env_ids`` takes, and the id that runs them with which keyword.
+_FILE_SITES = {".yaml": ("shieldnav/MapInspection-v0", "map_path"), ".yml": ("shieldnav/MapInspection-v0", "map_path"),
+               ".json": ("shieldnav/CorridorInspection-v0", "scenario_path")}
+
+
+def _is_file_entry(entry: Any) -> bool:
+    return isinstance(entry, os.PathLike) or (isinstance(entry, str) and Path(entry).suffix.lower() in _FILE_SITES)
+
+
+def _target(env_id: str) -> tuple[str, dict[str, Any]]:
+    """The registered id and site keywords that run an entry of ``env_ids`` (as checked)."""
+    suffix = Path(env_id).suffix.lower()
+    if suffix not in _FILE_SITES:
+        return env_id, {}
+    gym_id, key = _FILE_SITES[suffix]
+    site: dict[str, Any] = {key: env_id}
+    if key == "scenario_path":
+        site["procedural"] = False
+    return gym_id, site
+
+
 def _check_env_ids(env_ids: Any) -> list[str]:
+    """Registered ids (``shieldnav/`` may be left out) and map or scenario files, as strings."""
     from shieldnav.registration import ENV_IDS
 
-    if isinstance(env_ids, str):
+    if isinstance(env_ids, (str, os.PathLike)):
         env_ids = [env_ids]
     try:
         ids = list(env_ids)
@@ -113,11 +161,33 @@ def _check_env_ids(env_ids: Any) -> list[str]:
         raise InvalidArgumentError("invalid `env_ids`: empty; give at least one of " + ", ".join(sorted(ENV_IDS)))
     out = []
     for env_id in ids:
+        if _is_file_entry(env_id):
+            path = Path(os.fspath(env_id)).expanduser()
+            if path.suffix.lower() not in _FILE_SITES:
+                raise InvalidArgumentError(f"invalid `env_ids`: {os.fspath(env_id)!r} is neither a ROS map (.yaml, .yml) nor a scenario file (.json)")
+            if not path.is_file():
+                raise InvalidArgumentError(f"invalid `env_ids`: no such map or scenario file: {os.fspath(env_id)!r}")
+            out.append(str(path))
+            continue
         full = env_id if isinstance(env_id, str) and "/" in env_id else f"shieldnav/{env_id}"
         if not isinstance(env_id, str) or full not in ENV_IDS:
-            raise InvalidArgumentError(f"invalid `env_ids`: unknown environment id {env_id!r}; known ids are {', '.join(sorted(ENV_IDS))}")
+            raise InvalidArgumentError(
+                f"invalid `env_ids`: unknown environment id {env_id!r}; known ids are {', '.join(sorted(ENV_IDS))}, "
+                "or give a ROS map (.yaml) or scenario (.json) file"
+            )
         out.append(full)
     return list(dict.fromkeys(out))
+
+
+def make_env(env_id: str, **kwargs: Any) -> Any:
+    """``gymnasium.make`` of an entry of ``env_ids``: a registered id or a map or scenario file."""
+    import gymnasium as gym
+
+    import shieldnav  # noqa: F401  (registers the ids in a fresh worker)
+
+    (entry,) = _check_env_ids([env_id])
+    gym_id, site = _target(entry)
+    return gym.make(gym_id, **site, **kwargs)
 
 
 def _check_seeds(seeds: Any) -> list[int]:
@@ -148,9 +218,10 @@ def _check_policy(policy: Any) -> None:
         if policy not in POLICY_NAMES:
             raise InvalidArgumentError(f"invalid `policy`: expected a callable (obs, info) -> action, an SB3 model or one of {POLICY_NAMES}, got {policy!r}")
         return
-    if not (callable(policy) or callable(getattr(policy, "predict", None)) or callable(getattr(policy, "act", None))):
+    if not any(callable(policy if m is None else getattr(policy, m, None)) for m in (None, "predict", "act", "act_batch")):
         raise InvalidArgumentError(
-            f"invalid `policy`: expected a callable (obs, info) -> action, an object with act(obs, info) or predict(obs), or one of {POLICY_NAMES}; "
+            "invalid `policy`: expected a callable (obs, info) -> action, an object with act(obs, info), act_batch(obs, info) or predict(obs), "
+            f"or one of {POLICY_NAMES}; "
             f"got {type(policy).__name__}"
         )
 
@@ -181,15 +252,13 @@ def _actor(policy: Any, env: Any) -> Callable[[Any, dict[str, Any]], Any]:
         policy.reset()
     if callable(getattr(policy, "act", None)):
         return policy.act
+    if callable(getattr(policy, "act_batch", None)) and not callable(policy):
+        return lambda obs, info: np.asarray(policy.act_batch(np.asarray(obs)[None], info))[0]
     return policy
 
 
 def _run_one(env_id: str, seed: int, policy: Any, env_kwargs: dict[str, Any], gif_path: Any = None, stop_step: int | None = None) -> EpisodeSummary:
-    import gymnasium as gym
-
-    import shieldnav  # noqa: F401  (registers the ids in a fresh worker)
-
-    env = gym.make(env_id, render_mode="rgb_array" if gif_path is not None else None, **env_kwargs)
+    env = make_env(env_id, render_mode="rgb_array" if gif_path is not None else None, **env_kwargs)
     frames = []
     try:
         obs, info = env.reset(seed=seed)
@@ -235,6 +304,86 @@ def _run_task(env_id: str, seed: int, policy_blob: bytes | None, policy: Any, en
     return _run_one(env_id, seed, policy, env_kwargs)
 
 
+def _batch_actor(policy: Any) -> Callable[[np.ndarray, dict[str, Any]], Any]:
+    """``(obs batch, info) -> action batch`` for a vectorisable policy."""
+    if isinstance(policy, str):
+        from shieldnav.policies import load
+
+        return load(policy).act
+    if callable(getattr(policy, "reset", None)):
+        policy.reset()
+    if callable(getattr(policy, "act_batch", None)):
+        return policy.act_batch
+    if callable(getattr(policy, "predict", None)) and not callable(getattr(policy, "act", None)):
+        return lambda obs, info: policy.predict(obs, deterministic=True)[0]
+    if callable(getattr(policy, "act", None)):
+        return policy.act
+    return policy
+
+
+def _vectorisable(policy: Any) -> bool:
+    """Whether a policy acts on observation batches by itself: an SB3 model, ``"ppo"``, an
+    object with ``act_batch``."""
+    if isinstance(policy, str):
+        return policy == "ppo"
+    if callable(getattr(policy, "act_batch", None)):
+        return True
+    return callable(getattr(policy, "predict", None)) and not callable(getattr(policy, "act", None))
+
+
+def _run_batch(env_id: str, seeds: list[int], policy: Any, env_kwargs: dict[str, Any], threads: int) -> list[EpisodeSummary]:
+    """One episode per seed, every seed a sub-environment of one native batch (sub-environment
+    ``i`` is the single environment reset with ``seeds[i]``); the policy acts on the batch."""
+    import gymnasium as gym
+
+    import shieldnav  # noqa: F401  (registers the ids)
+
+    gym_id, site = _target(env_id)
+    n = len(seeds)
+    venv = gym.make_vec(gym_id, num_envs=n, vectorization_mode="vector_entry_point", threads=threads, **site, **env_kwargs)
+    try:
+        obs, info = venv.reset(seed=seeds)  # type: ignore[arg-type]  # (a seed per sub-environment)
+        act = _batch_actor(policy)
+        want = (n, *(venv.single_action_space.shape or ()))
+        active = np.ones(n, bool)
+        steps = np.zeros(n, np.int64)
+        contact_steps = np.zeros(n, np.int64)
+        ret = np.zeros(n)
+        first_contact: list[tuple[int, float] | None] = [None] * n
+        first_deadlock: list[tuple[int, float] | None] = [None] * n
+        rows: list[EpisodeSummary | None] = [None] * n
+        while active.any():
+            actions = np.asarray(act(obs, info), dtype=np.float32)
+            if actions.shape != want:
+                raise InvalidArgumentError(
+                    f"invalid `policy`: on a batch of {n} observations it returned actions of shape {actions.shape}, "
+                    f"expected {want}; pass vectorised=False to run it one observation at a time"
+                )
+            obs, reward, terminated, truncated, info = venv.step(actions)
+            steps[active] += 1
+            ret[active] += reward[active]
+            touched = active & (info["collision"] | (info["contacts"] > 0))
+            contact_steps += touched
+            for i in np.flatnonzero(touched | (active & info["deadlock"])):
+                t = (int(steps[i]), float(info["time"][i]))
+                if touched[i] and first_contact[i] is None:
+                    first_contact[i] = t
+                if info["deadlock"][i] and first_deadlock[i] is None:
+                    first_deadlock[i] = t
+            for i in np.flatnonzero(active & (terminated | truncated)):
+                fc, fd = first_contact[i], first_deadlock[i]
+                rows[i] = EpisodeSummary(
+                    env_id=env_id, seed=seeds[i], steps=int(steps[i]), time=float(info["time"][i]), contact_steps=int(contact_steps[i]),
+                    first_contact_step=fc and fc[0], first_contact_time=fc and fc[1], deadlock=fd is not None,
+                    first_deadlock_step=fd and fd[0], first_deadlock_time=fd and fd[1],
+                    coverage=float(info["coverage"][i]), episode_return=float(ret[i]), terminated=bool(terminated[i]), truncated=bool(truncated[i]),
+                )
+                active[i] = False
+    finally:
+        venv.close()
+    return [r for r in rows if r is not None]
+
+
 def run_episodes(
     policy: Any,
     env_ids: str | Sequence[str],
@@ -242,13 +391,18 @@ def run_episodes(
     workers: int | None = None,
     max_steps: int | None = None,
     gif_dir: str | os.PathLike[str] | None = None,
+    vectorised: bool | None = None,
     **env_kwargs: Any,
 ) -> EpisodeTable:
     """Runs ``policy`` for one episode on every env id × seed and returns the summaries, sorted
     by (env id, seed).
 
     ``workers``: processes to run on (default: the CPUs available, at most one per episode; 1
-    runs in this process). A policy that cannot be pickled (a lambda, a closure) runs in this
+    runs in this process), or the native batch's threads.
+    ``vectorised``: run on the native batch (True), in processes (False), or decide from the
+    policy (None: an SB3 model, ``"ppo"`` and objects with ``act_batch`` run on the batch;
+    ``"scripted"`` and plain callables in processes). With True, a plain callable is called as
+    ``policy(obs_batch, info)`` and must return an ``(n, 3)`` action batch. A policy that cannot be pickled (a lambda, a closure) runs in this
     process when ``workers`` is not given, and is an error with ``workers > 1``. The worker
     processes are spawned (they import the main module: guard a script's code with
     ``if __name__ == "__main__":``) and kept for the next call with as many workers.
@@ -270,12 +424,25 @@ def run_episodes(
         env_kwargs["time_limit"] = max_steps
     if gif_dir is not None and not isinstance(gif_dir, (str, os.PathLike)):
         raise InvalidArgumentError(f"invalid `gif_dir`: expected a folder path, got {gif_dir!r}")
+    if vectorised is not None and not isinstance(vectorised, bool):
+        raise InvalidArgumentError(f"invalid `vectorised`: expected True, False or None, got {vectorised!r}")
+    if vectorised and policy == "scripted":
+        raise InvalidArgumentError("invalid `vectorised`: the scripted agent keeps a plan per environment and runs one environment at a time")
+    batch_keys = sorted(k for k in ("observation",) if k in env_kwargs and env_kwargs[k] != "flat")
+    if vectorised and batch_keys:
+        raise InvalidArgumentError(f"invalid `vectorised`: the native batch serves the flat observation only (got observation={env_kwargs['observation']!r})")
+    use_batch = vectorised if vectorised is not None else (_vectorisable(policy) and not batch_keys)
 
     try:
         blob: bytes | None = pickle.dumps(policy)
         pickle_error = None
     except (pickle.PicklingError, TypeError, AttributeError) as err:
         blob, pickle_error = None, err
+    if use_batch:
+        threads = default_workers() if workers is None else int(workers)
+        rows = [r for env_id in ids for r in _run_batch(env_id, seed_list, pickle.loads(blob) if blob is not None else _fresh(policy), env_kwargs, threads)]
+        rows.sort(key=lambda r: (r.env_id, r.seed))
+        return EpisodeTable(rows, blob, policy, env_kwargs, gif_dir=None if gif_dir is None else os.fspath(gif_dir), vectorised=True)
     tasks = [(env_id, seed) for env_id in ids for seed in seed_list]
     n = min(default_workers() if workers is None else int(workers), len(tasks))
     if blob is None and n > 1:
@@ -459,5 +626,6 @@ __all__ = [
     "assert_safe_episodes",
     "cases",
     "default_workers",
+    "make_env",
     "run_episodes",
 ]
