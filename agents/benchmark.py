@@ -31,7 +31,7 @@ import multiprocessing
 import os
 import sys
 import tempfile
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, Iterator
 
@@ -41,6 +41,7 @@ from tqdm import tqdm
 
 from agents import report
 from agents.episodes import check_policy, run_episode
+from agents.pool import as_finished
 
 SHIELDS = ["braking", "composite", "distance", "hardmin", "none"]
 PAPER = ["shieldnav/ConstrictedPassage-v0", "shieldnav/OdometryJump-v0", "shieldnav/DynamicObstacles-v0"]
@@ -120,14 +121,7 @@ def run_local(todo: list[dict[str, Any]], workers: int) -> Iterator[dict[str, An
     # thread pools: spawn fresh interpreters then, fork (fast, keeps the parent's state) otherwise
     context = multiprocessing.get_context("spawn" if "torch" in sys.modules else None)
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures = [pool.submit(run_episode, t) for t in todo]
-        try:
-            for f in as_completed(futures):
-                yield f.result()
-        except BaseException:
-            for f in futures:
-                f.cancel()
-            raise
+        yield from as_finished(pool, run_episode, todo)
 
 
 def run_ray(todo: list[dict[str, Any]], address: str | None, workers: int) -> Iterator[dict[str, Any]]:

@@ -38,13 +38,14 @@ import shutil
 import signal
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, Iterator
 
 import yaml
 
 from agents import benchmark
+from agents.pool import as_finished
 from agents.train import ALGOS, SEED_END, write_json_atomically
 
 #: The keys of an algorithm's block that are not constructor keywords (rl-zoo3's names).
@@ -162,16 +163,7 @@ def run_local(todo: list[dict[str, Any]], workers: int) -> Iterator[tuple[dict[s
         return
     # spawn: a forked child of a parent that has loaded torch can deadlock in torch's thread pools
     with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=_one_thread) as pool:
-        futures = [pool.submit(_worker, run) for run in todo]
-        try:
-            for f in as_completed(futures):
-                yield f.result()
-        except BaseException:
-            for f in futures:
-                f.cancel()
-            for p in list(getattr(pool, "_processes", {}).values()):  # stop the runs in flight at once
-                p.terminate()
-            raise
+        yield from as_finished(pool, _worker, todo)
 
 
 def run_ray(todo: list[dict[str, Any]], address: str | None, workers: int) -> Iterator[tuple[dict[str, Any], dict[str, Any]]]:
