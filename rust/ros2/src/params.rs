@@ -12,43 +12,28 @@ use yaml_rust2::{Yaml, YamlLoader};
 
 use crate::translate::Mount;
 
-/// A parameter's value as a parameter file or `-p name:=value` writes it.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Value {
-    /// `null` or `~`: the option is off.
-    Null,
-    /// `true` / `false`.
-    Bool(bool),
-    /// An integer.
-    Int(i64),
-    /// A floating-point number.
-    Float(f64),
-    /// A string.
-    Str(String),
-    /// A list.
-    List(Vec<Value>),
+/// A parameter's value as a parameter file or `-p name:=value` writes it (`None` is `null` or
+/// `~`: the option is off): the core's keyword value.
+pub use shieldnav_core::env::keywords::Value;
+
+fn value_from_yaml(y: &Yaml) -> Option<Value> {
+    Some(match y {
+        Yaml::Null => Value::None,
+        Yaml::Boolean(b) => Value::Bool(*b),
+        Yaml::Integer(i) => Value::Int(*i),
+        Yaml::Real(s) => Value::Float(parse_real(s)?),
+        Yaml::String(s) => Value::Str(s.clone()),
+        Yaml::Array(a) => Value::List(a.iter().map(value_from_yaml).collect::<Option<_>>()?),
+        _ => return None,
+    })
 }
 
-impl Value {
-    fn from_yaml(y: &Yaml) -> Option<Self> {
-        Some(match y {
-            Yaml::Null => Value::Null,
-            Yaml::Boolean(b) => Value::Bool(*b),
-            Yaml::Integer(i) => Value::Int(*i),
-            Yaml::Real(s) => Value::Float(parse_real(s)?),
-            Yaml::String(s) => Value::Str(s.clone()),
-            Yaml::Array(a) => Value::List(a.iter().map(Value::from_yaml).collect::<Option<_>>()?),
-            _ => return None,
-        })
-    }
-
-    /// Reads a value written as on a ROS 2 command line (`name:=value`): YAML scalars and
-    /// flow lists (`1.5`, `true`, `[0.9, 0.45]`, `null`, `braking`).
-    pub fn parse(text: &str) -> Self {
-        match YamlLoader::load_from_str(text).ok().and_then(|docs| docs.into_iter().next()) {
-            Some(y) => Value::from_yaml(&y).unwrap_or_else(|| Value::Str(text.to_string())),
-            None => Value::Null,
-        }
+/// Reads a value written as on a ROS 2 command line (`name:=value`): YAML scalars and flow
+/// lists (`1.5`, `true`, `[0.9, 0.45]`, `null`, `braking`).
+pub fn parse_value(text: &str) -> Value {
+    match YamlLoader::load_from_str(text).ok().and_then(|docs| docs.into_iter().next()) {
+        Some(y) => value_from_yaml(&y).unwrap_or_else(|| Value::Str(text.to_string())),
+        None => Value::None,
     }
 }
 
@@ -58,28 +43,6 @@ fn parse_real(s: &str) -> Option<f64> {
         "-.inf" | "-.Inf" | "-.INF" => Some(f64::NEG_INFINITY),
         ".nan" | ".NaN" | ".NAN" => Some(f64::NAN),
         t => t.parse().ok(),
-    }
-}
-
-impl fmt::Display for Value {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Value::Null => f.write_str("null"),
-            Value::Bool(b) => write!(f, "{b}"),
-            Value::Int(i) => write!(f, "{i}"),
-            Value::Float(x) => write!(f, "{x}"),
-            Value::Str(s) => write!(f, "{s:?}"),
-            Value::List(l) => {
-                f.write_str("[")?;
-                for (k, v) in l.iter().enumerate() {
-                    if k > 0 {
-                        f.write_str(", ")?;
-                    }
-                    write!(f, "{v}")?;
-                }
-                f.write_str("]")
-            }
-        }
     }
 }
 
@@ -257,7 +220,7 @@ impl RawParams {
                 // nested parameters (`a: {b: 1}` is `a.b`)
                 Yaml::Hash(inner) => self.add_hash(&format!("{name}."), inner, source)?,
                 y => {
-                    let value = Value::from_yaml(y).ok_or_else(|| ParamError::new(&name, format!("cannot read the value {y:?}")))?;
+                    let value = value_from_yaml(y).ok_or_else(|| ParamError::new(&name, format!("cannot read the value {y:?}")))?;
                     self.values.insert(name, value);
                 }
             }
@@ -298,7 +261,7 @@ impl RawParams {
         }
         for s in sets {
             let (name, value) = s.split_once(":=").ok_or_else(|| ParamError::new("-p", format!("expects name:=value, got {s:?}")))?;
-            raw.values.insert(name.to_string(), Value::parse(value));
+            raw.values.insert(name.to_string(), parse_value(value));
         }
         Ok(raw)
     }
@@ -338,7 +301,7 @@ impl RawParams {
             Some(v) => return Err(ParamError::new("height_band", format!("expects [z_lo, z_hi] or null, got {} values", v.len()))),
         };
         let angular_bins = match g.get("angular_bins") {
-            None | Some(Value::Null) => d.scan.angular_bins,
+            None | Some(Value::None) => d.scan.angular_bins,
             Some(Value::Int(i)) if *i >= 0 => Some(*i as usize),
             Some(v) => return Err(ParamError::new("angular_bins", format!("expects a non-negative integer or null, got {v}"))),
         };
@@ -461,7 +424,7 @@ impl Getter<'_> {
     fn opt_float(&self, name: &str, default: Option<f64>) -> Result<Option<f64>, ParamError> {
         match self.get(name) {
             None => Ok(default),
-            Some(Value::Null) => Ok(None),
+            Some(Value::None) => Ok(None),
             Some(_) => self.float(name, 0.0).map(Some),
         }
     }
@@ -486,7 +449,7 @@ impl Getter<'_> {
         match self.get(name) {
             None => Ok(default.to_string()),
             Some(Value::Str(s)) => Ok(s.clone()),
-            Some(Value::Null) => Ok(String::new()),
+            Some(Value::None) => Ok(String::new()),
             Some(v) => Err(ParamError::new(name, format!("expects a string, got {v}"))),
         }
     }
@@ -498,7 +461,7 @@ impl Getter<'_> {
     fn opt_floats(&self, name: &str, default: Option<Vec<f64>>) -> Result<Option<Vec<f64>>, ParamError> {
         match self.get(name) {
             None => Ok(default),
-            Some(Value::Null) => Ok(None),
+            Some(Value::None) => Ok(None),
             Some(Value::List(l)) => l
                 .iter()
                 .map(|v| match v {

@@ -6,7 +6,7 @@ use common::{forward, ring_scan, wall_scan, BEAMS};
 use std::time::{Duration, Instant};
 
 use shieldnav_ros2::msg::{Header, LaserScan, Odometry, PointCloud2, PointField, Twist};
-use shieldnav_ros2::params::{RawParams, Value};
+use shieldnav_ros2::params::{parse_value, RawParams, Value};
 use shieldnav_ros2::translate::{laser_scan_points, point_cloud_points, Mount};
 use shieldnav_ros2::{Output, ShieldNode};
 
@@ -297,12 +297,12 @@ fn bad_parameters_are_named() {
 
 #[test]
 fn command_line_values_read_as_yaml() {
-    assert_eq!(Value::parse("1.5"), Value::Float(1.5));
-    assert_eq!(Value::parse("3"), Value::Int(3));
-    assert_eq!(Value::parse("true"), Value::Bool(true));
-    assert_eq!(Value::parse("[0.9, 0.45]"), Value::List(vec![Value::Float(0.9), Value::Float(0.45)]));
-    assert_eq!(Value::parse("null"), Value::Null);
-    assert_eq!(Value::parse("/scan"), Value::Str("/scan".into()));
+    assert_eq!(parse_value("1.5"), Value::Float(1.5));
+    assert_eq!(parse_value("3"), Value::Int(3));
+    assert_eq!(parse_value("true"), Value::Bool(true));
+    assert_eq!(parse_value("[0.9, 0.45]"), Value::List(vec![Value::Float(0.9), Value::Float(0.45)]));
+    assert_eq!(parse_value("null"), Value::None);
+    assert_eq!(parse_value("/scan"), Value::Str("/scan".into()));
 }
 
 #[test]

@@ -52,6 +52,29 @@ impl Value {
     }
 }
 
+/// As YAML and ROS 2 parameters write it: `null`, `true`, `3`, `0.5`, `"text"`, `[0.9, 0.45]`.
+impl std::fmt::Display for Value {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Value::None => f.write_str("null"),
+            Value::Bool(b) => write!(f, "{b}"),
+            Value::Int(i) => write!(f, "{i}"),
+            Value::Float(x) => write!(f, "{x}"),
+            Value::Str(s) => write!(f, "{s:?}"),
+            Value::List(l) => {
+                f.write_str("[")?;
+                for (k, v) in l.iter().enumerate() {
+                    if k > 0 {
+                        f.write_str(", ")?;
+                    }
+                    write!(f, "{v}")?;
+                }
+                f.write_str("]")
+            }
+        }
+    }
+}
+
 /// A configuration field's type, read from a [`Value`]; the error says what was expected.
 trait FromValue: Sized {
     fn from_value(v: &Value) -> std::result::Result<Self, String>;
