@@ -127,3 +127,17 @@ def test_a_yaw_rate_limit_beyond_the_body_rate_limit_names_w_max():
         gym.make("shieldnav/OdometryJump-v0", w_max=14370)
     with pytest.raises(InvalidArgumentError, match="invalid `w_max`"):
         Shield(method="braking", w_max=2e4)
+
+
+@pytest.mark.parametrize("name", ["coverage_reward", "collision_penalty", "intervention_penalty"])
+def test_a_reward_weight_that_could_make_the_reward_infinite_names_itself(name):
+    """Found by fuzzing: `intervention_penalty=1e308` made a step's reward -inf."""
+    import gymnasium as gym
+
+    with pytest.raises(InvalidArgumentError, match=f"invalid `{name}`: must be within ±1e6"):
+        gym.make("shieldnav/DynamicObstacles-v0", **{name: -1e308})
+    env = gym.make("shieldnav/DynamicObstacles-v0", **{name: 1e6})  # the limit itself is accepted
+    env.reset(seed=1)
+    for _ in range(20):
+        obs, reward, *_ = env.step(np.array([1.0, 1.0, 1.0], np.float32))
+        assert np.isfinite(reward) and np.all(np.isfinite(obs))

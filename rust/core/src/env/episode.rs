@@ -13,6 +13,10 @@ use crate::sim::{World, WorldConfig};
 use crate::world::generate::{generate, GeneratorConfig};
 use crate::world::{preset, wrap_angle, Pose2, Scenario};
 
+/// The largest magnitude of a reward weight: the weighted terms (metres inspected in a step, a
+/// contact flag, a change of command in m/s) then stay far from overflowing to an infinite reward.
+pub const REWARD_WEIGHT_LIMIT: Real = 1e6;
+
 /// Reward weights: `r = coverage · (new inspected length, m) − collision · cost − intervention ·
 /// ‖u* − u_nom‖`. `Default`: 1, 1, 0.05.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -279,8 +283,8 @@ impl Episode {
             return Err(Error::invalid("waypoint_reach", format!("must be finite and > 0 m, got {}", config.waypoint_reach)));
         }
         for (name, v) in [("coverage_reward", config.reward.coverage), ("collision_penalty", config.reward.collision), ("intervention_penalty", config.reward.intervention)] {
-            if !v.is_finite() {
-                return Err(Error::invalid(name, format!("must be finite, got {v}")));
+            if !(v.is_finite() && v.abs() <= REWARD_WEIGHT_LIMIT) {
+                return Err(Error::invalid(name, format!("must be within ±{REWARD_WEIGHT_LIMIT:e}, got {v}")));
             }
         }
         config.observation.validate(config.world.lidar.columns)?;
