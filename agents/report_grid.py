@@ -1,6 +1,6 @@
 """Learning curves and a table of final figures from an experiment grid's run folders.
 
-    python -m agents.report_grid results/grid/safe_rl --out docs/training
+    python -m agents.report_grid results/grid/safe_rl [results/grid/sac ...] --out docs/training
 
 For each environment of the grid, ``<out>/<env>.png`` holds four panels against training env
 steps: episode return, coverage, contact steps per episode (all three over the training episodes
@@ -29,10 +29,10 @@ COLOURS = {"ppo_braking": "tab:green", "ppo_composite": "tab:blue", "ppo_none": 
            "ppo_lagrangian": "tab:purple", "sac_braking": "tab:olive", "sac_composite": "tab:cyan", "sac_none": "tab:brown"}
 
 
-def load_runs(grid: Path) -> dict[str, dict[str, list[dict[str, Any]]]]:
-    """``{env: {method: [run.json, one per seed]}}`` of every finished run under ``grid``."""
+def load_runs(*grids: Path) -> dict[str, dict[str, list[dict[str, Any]]]]:
+    """``{env: {method: [run.json, one per seed]}}`` of every finished run under the ``grids``."""
     out: dict[str, dict[str, list[dict[str, Any]]]] = {}
-    for path in sorted(grid.glob("*/*/seed_*/run.json")):
+    for path in sorted(p for grid in grids for p in grid.glob("*/*/seed_*/run.json")):
         meta = json.loads(path.read_text())
         env, method = meta.get("grid", {}).get("env", path.parts[-4]), meta.get("grid", {}).get("method", path.parts[-3])
         out.setdefault(env, {}).setdefault(method, []).append(meta)
@@ -93,7 +93,7 @@ def spread(values: list[float], digits: int = 3) -> str:
     return f"{v.mean():.{digits}f} ± {v.std():.{digits}f}"
 
 
-def table(runs: dict[str, dict[str, list[dict[str, Any]]]], scripted: dict[str, dict[str, Any]], grid_summary: dict[str, Any] | None) -> str:
+def table(runs: dict[str, dict[str, list[dict[str, Any]]]], scripted: dict[str, dict[str, Any]], grid_summaries: dict[str, dict[str, Any]]) -> str:
     lines = ["| env | method | seeds | steps | eval coverage | training coverage | training return | contact steps / episode | "
              "training contact steps (per seed) | episodes with contact | steps/s |", "|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|"]
     for env, methods in runs.items():
@@ -109,9 +109,9 @@ def table(runs: dict[str, dict[str, list[dict[str, Any]]]], scripted: dict[str, 
             s = scripted[env]
             lines.append(f"| {env} | scripted agent (braking) | {len(s['per_seed'])} | – | {spread(s['per_seed'])} | – | – | – | – | – | – |")
     text = "\n".join(lines) + "\n"
-    if grid_summary:
-        text += (f"\nThe grid's last invocation: {grid_summary['done']} runs in {grid_summary['wall_time_s'] / 60:.1f} min, "
-                 f"{grid_summary['steps_per_s']:.0f} training env steps/s over {grid_summary['workers']} workers ({grid_summary['backend']}).\n")
+    for name, g in grid_summaries.items():
+        text += (f"\nThe last invocation of the grid `{name}`: {g['done']} runs in {g['wall_time_s'] / 60:.1f} min, "
+                 f"{g['steps_per_s']:.0f} training env steps/s over {g['workers']} workers ({g['backend']}).\n")
     return text
 
 
@@ -159,24 +159,23 @@ def figure(env: str, methods: dict[str, list[dict[str, Any]]], scripted: dict[st
 
 def main(argv: list[str] | None = None) -> Path:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("grid", help="the grid's folder (agents.grid --out)")
+    ap.add_argument("grids", nargs="+", help="the grids' folders (agents.grid --out); their runs are drawn together")
     ap.add_argument("--out", default="docs/training", help="where the pictures and results.md go")
     ap.add_argument("--scripted-seeds", type=int, default=3, help="episodes of the scripted agent per environment (0: no line)")
     args = ap.parse_args(argv)
-    grid, out = Path(args.grid), Path(args.out)
-    runs = load_runs(grid)
+    grids, out = [Path(g) for g in args.grids], Path(args.out)
+    runs = load_runs(*grids)
     if not runs:
-        ap.error(f"no finished run (run.json) under {grid}")
+        ap.error(f"no finished run (run.json) under {', '.join(map(str, grids))}")
     out.mkdir(parents=True, exist_ok=True)
     scripted = {}
     for env, methods in runs.items():
         meta = next(iter(methods.values()))[0]
         if args.scripted_seeds > 0:
-            scripted[env] = scripted_coverage(meta["env_id"], meta.get("max_episode_steps"), args.scripted_seeds, grid / "scripted.json")
+            scripted[env] = scripted_coverage(meta["env_id"], meta.get("max_episode_steps"), args.scripted_seeds, grids[0] / "scripted.json")
         figure(env, methods, scripted.get(env), out / f"{env}.png")
-    summary_path = grid / "grid.json"
-    summary = json.loads(summary_path.read_text()) if summary_path.exists() else None
-    (out / "results.md").write_text(table(runs, scripted, summary))
+    summaries = {g.name: json.loads((g / "grid.json").read_text()) for g in grids if (g / "grid.json").exists()}
+    (out / "results.md").write_text(table(runs, scripted, summaries))
     print(f"{out / 'results.md'} and {len(runs)} picture(s) in {out}")
     return out / "results.md"
 

@@ -241,12 +241,19 @@ def test_every_shipped_experiment_file_loads_and_names_its_runs(path, tmp_path):
 def test_the_report_draws_each_environment_and_tables_every_method_with_the_scripted_line(tmp_path):
     from agents import report_grid
 
-    out = tmp_path / "grid"
+    out, other = tmp_path / "grid", tmp_path / "other"
     grid.run_grid(tiny(tmp_path), out, echo=lambda _: None)
-    table = report_grid.main([str(out), "--out", str(tmp_path / "docs"), "--scripted-seeds", "1"]).read_text().splitlines()
+    # a second grid folder with another method: drawn and tabled with the first
+    config = tiny(tmp_path)
+    config["methods"] = {"ppo_none": {**config["methods"]["ppo_braking"], "shield": "none"}}
+    config["seeds"] = [0]
+    grid.run_grid(config, other, echo=lambda _: None)
+    text = report_grid.main([str(out), str(other), "--out", str(tmp_path / "docs"), "--scripted-seeds", "1"]).read_text()
+    table = text.splitlines()
     assert (tmp_path / "docs" / "cp.png").stat().st_size > 10_000
     rows = [[c.strip() for c in line.strip("|").split("|")] for line in table if line.startswith("| cp")]
-    assert [r[1] for r in rows] == ["ppo_braking", "scripted agent (braking)"]
+    assert [r[1] for r in rows] == ["ppo_braking", "ppo_none", "scripted agent (braking)"]
+    assert "The last invocation of the grid `grid`: 2 runs" in text and "The last invocation of the grid `other`: 1 runs" in text
     safety = [json.loads((out / "cp" / "ppo_braking" / f"seed_{s}" / "run.json").read_text())["training_safety"] for s in (0, 1)]
     assert rows[0][2] == "2" and rows[0][8].endswith(f"({safety[0]['contact_steps']}, {safety[1]['contact_steps']})")
     assert json.loads((out / "scripted.json").read_text())  # the scripted agent's episodes, kept for the next report
