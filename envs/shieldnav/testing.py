@@ -428,10 +428,10 @@ def run_episodes(
         raise InvalidArgumentError(f"invalid `vectorised`: expected True, False or None, got {vectorised!r}")
     if vectorised and policy == "scripted":
         raise InvalidArgumentError("invalid `vectorised`: the scripted agent keeps a plan per environment and runs one environment at a time")
-    batch_keys = sorted(k for k in ("observation",) if k in env_kwargs and env_kwargs[k] != "flat")
-    if vectorised and batch_keys:
+    flat = env_kwargs.get("observation", "flat") == "flat"  # (the native batch serves the flat observation only)
+    if vectorised and not flat:
         raise InvalidArgumentError(f"invalid `vectorised`: the native batch serves the flat observation only (got observation={env_kwargs['observation']!r})")
-    use_batch = vectorised if vectorised is not None else (_vectorisable(policy) and not batch_keys)
+    use_batch = vectorised if vectorised is not None else (_vectorisable(policy) and flat)
 
     try:
         blob: bytes | None = pickle.dumps(policy)
