@@ -15,12 +15,15 @@ Attackers:
   reward for contact and for low clearance), evaluated with ``--attacker-model``.
 
 Sites: procedural office sites, the paper's static scenarios and every ROS map in
-``--maps`` (default ``../shared/maps`` beside the repository); the scenario with moving
-obstacles runs too and is reported apart (``dynamic``), since a reactive shield cannot stop
-something from driving into a robot that already stands.
+``--maps`` (default ``../shared/maps`` beside the repository); tight spaces (``agents.tight``:
+the robot started in aisles, L-shaped aisles and doorways 0.60–0.90 m wide, narrower than
+the shield's 0.9 m ellipse, beside, facing and in the corner of walls), reported apart
+(``tight``); the scenario with moving obstacles, reported apart too (``moving``), since a
+reactive shield cannot stop something from driving into a robot that already stands.
 
     python -m agents.redteam                               # >= 10,000 episodes per shield
     python -m agents.redteam --quick                       # a short look
+    python -m agents.redteam --tight --episodes 200        # the tight spaces only
     python -m agents.redteam --shields braking --attackers held --episodes 64
     python -m agents.redteam --train-attacker --timesteps 300000 --out results/redteam
     python -m agents.redteam --attackers ppo --attacker-model results/redteam/attacker.zip
@@ -47,23 +50,34 @@ import shieldnav  # noqa: F401  (registers the ids)
 from tqdm import tqdm
 
 from agents.benchmark import check_options, output_folder, positive_int
+from agents.tight import scenario_file, tight_sites
 
 ATTACKERS = ["held", "seeker", "skimmer", "ppo"]
 SHIELDS = ["braking", "composite"]
 STATIC = ["shieldnav/CorridorInspection-v0", "shieldnav/ConstrictedPassage-v0", "shieldnav/OdometryJump-v0"]
 DYNAMIC = ["shieldnav/DynamicObstacles-v0"]
 DEFAULT_MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
+#: The id that runs the tight sites' scenario files.
+TIGHT_ID = "shieldnav/CorridorInspection-v0"
+#: The tight sites of ``--quick``.
+QUICK_TIGHT = ("aisle-0.70", "door-0.80-inside")
+#: The groups of sites, each reported apart.
+WORLDS = ("static", "tight", "moving")
 #: Control periods per second at the default dt.
 RATE = 50
 
 
-def sites(maps: Path | None) -> list[dict[str, Any]]:
-    """Every site of a full run: the static ids, each map of ``maps``, then the moving one."""
-    out = [{"site": env_id.split("/")[1].removesuffix("-v0"), "env_id": env_id, "kwargs": {}, "dynamic": False} for env_id in STATIC]
+def sites(maps: Path | None, seed: int = 0) -> list[dict[str, Any]]:
+    """Every site of a full run: the static ids, each map of ``maps``, the tight spaces (their
+    scenario built from ``seed``), then the moving one."""
+    def site(name: str, env_id: str, worlds: str, **extra: Any) -> dict[str, Any]:
+        return {"site": name, "env_id": env_id, "kwargs": {}, "worlds": worlds, "dynamic": worlds == "moving", **extra}
+
+    out = [site(env_id.split("/")[1].removesuffix("-v0"), env_id, "static") for env_id in STATIC]
     if maps is not None and maps.is_dir():
-        for yaml in sorted(maps.glob("*/*.yaml")):
-            out.append({"site": yaml.parent.name, "env_id": "shieldnav/MapInspection-v0", "kwargs": {"map_path": str(yaml)}, "dynamic": False})
-    out += [{"site": env_id.split("/")[1].removesuffix("-v0"), "env_id": env_id, "kwargs": {}, "dynamic": True} for env_id in DYNAMIC]
+        out += [site(yaml.parent.name, "shieldnav/MapInspection-v0", "static", kwargs={"map_path": str(yaml)}) for yaml in sorted(maps.glob("*/*.yaml"))]
+    out += [site(t["site"], TIGHT_ID, "tight", scenario=t["scenario"]) for t in tight_sites(seed)]
+    out += [site(env_id.split("/")[1].removesuffix("-v0"), env_id, "moving") for env_id in DYNAMIC]
     return out
 
 
@@ -117,9 +131,12 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
     """``episodes`` episodes of one attacker against one shield on one site, in one native
     vector environment; returns the totals and the per-episode figures."""
     n = min(task["num_envs"], task["episodes"])
+    kwargs = dict(task["kwargs"])
+    if task.get("scenario") is not None:  # (written where the cell runs: a Ray worker may be elsewhere)
+        kwargs["scenario_path"] = scenario_file(task["scenario"])
     env = gym.make_vec(
         task["env_id"], num_envs=n, vectorization_mode="vector_entry_point", autoreset_mode="same_step",
-        time_limit=task["steps"], terminate_at_goal=False, shield=task["shield"], threads=task["threads"], **task["kwargs"],
+        time_limit=task["steps"], terminate_at_goal=False, shield=task["shield"], threads=task["threads"], **kwargs,
     )
     attacker = Attacker(task["attacker"], n, task["seed"], task.get("model"))
     obs, _ = env.reset(seed=task["seed"])
@@ -138,7 +155,7 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
     episodes = episodes[: task["episodes"]]
     contact = [e["contact_steps"] for e in episodes]
     return {
-        **{k: task[k] for k in ("site", "env_id", "shield", "attacker", "dynamic")},
+        **{k: task[k] for k in ("site", "env_id", "shield", "attacker", "worlds", "dynamic")},
         "episodes": len(episodes),
         "steps": int(sum(e["steps"] for e in episodes)),
         "contact_steps": int(sum(contact)),
@@ -166,7 +183,11 @@ def run_ray(todo: list[dict[str, Any]], address: str | None, workers: int) -> It
             ray.init(address=address, runtime_env=env, log_to_driver=False)
         else:
             ray.init(num_cpus=workers, runtime_env=env, log_to_driver=False, include_dashboard=False)
-    remote = ray.remote(num_cpus=1)(run_cell)
+    # by reference, so that a worker imports this module (and shieldnav with its ids): under
+    # `python -m agents.redteam` this module's own run_cell is __main__'s, sent by value
+    from agents.redteam import run_cell as by_reference
+
+    remote = ray.remote(num_cpus=1)(by_reference)
     pending = [remote.remote({**t, "threads": 1}) for t in todo]
     try:
         while pending:
@@ -204,14 +225,14 @@ def train_attacker(env_id: str, shield: str, timesteps: int, seed: int, out: Pat
 
 
 def table(results: list[dict[str, Any]]) -> str:
-    """Totals per (static or moving, shield, attacker)."""
+    """Totals per (static, tight or moving worlds, shield, attacker)."""
     rows = ["| worlds | shield | attacker | episodes | steps | contact steps | episodes with contact | least clearance (m) |",
             "|---|---|---|---:|---:|---:|---:|---:|"]
-    keys = sorted({(r["dynamic"], r["shield"], r["attacker"]) for r in results})
-    for dyn, shield, attacker in keys:
-        rs = [r for r in results if (r["dynamic"], r["shield"], r["attacker"]) == (dyn, shield, attacker)]
+    keys = sorted({(WORLDS.index(r["worlds"]), r["shield"], r["attacker"]) for r in results})
+    for w, shield, attacker in keys:
+        rs = [r for r in results if (r["worlds"], r["shield"], r["attacker"]) == (WORLDS[w], shield, attacker)]
         rows.append(
-            f"| {'moving' if dyn else 'static'} | {shield} | {attacker} | {sum(r['episodes'] for r in rs):,} | {sum(r['steps'] for r in rs):,} | "
+            f"| {WORLDS[w]} | {shield} | {attacker} | {sum(r['episodes'] for r in rs):,} | {sum(r['steps'] for r in rs):,} | "
             f"{sum(r['contact_steps'] for r in rs):,} | {sum(r['episodes_with_contact'] for r in rs):,} | {min(r['least_clearance'] for r in rs):.3f} |"
         )
     return "\n".join(rows)
@@ -221,7 +242,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap = argparse.ArgumentParser(prog="python -m agents.redteam", description=__doc__.split("\n\n")[0])
     ap.add_argument("--shields", nargs="+", default=SHIELDS, choices=["braking", "composite", "distance", "hardmin", "none"])
     ap.add_argument("--attackers", nargs="+", default=["held", "seeker", "skimmer"], choices=ATTACKERS)
-    ap.add_argument("--episodes", type=positive_int, default=10_000, help="episodes per shield over the static worlds (split over sites and attackers)")
+    ap.add_argument("--episodes", type=positive_int, default=10_000,
+                    help="episodes per shield over the static worlds, and again over the tight spaces (split over sites and attackers)")
     ap.add_argument("--steps", type=positive_int, default=750, help="steps per episode (50 Hz)")
     ap.add_argument("--maps", type=Path, default=DEFAULT_MAPS, help="a folder of ROS maps (<name>/<name>.yaml)")
     ap.add_argument("--num-envs", type=positive_int, default=64, help="episodes stepped together per cell")
@@ -229,7 +251,8 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--backend", default="local", choices=["local", "ray"])
     ap.add_argument("--ray-address", default=None)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--quick", action="store_true", help="48 episodes per shield on three sites")
+    ap.add_argument("--quick", action="store_true", help="48 episodes per shield on three sites and two tight spaces")
+    ap.add_argument("--tight", action="store_true", help="the tight spaces only")
     ap.add_argument("--attacker-model", default=None, help="the ppo attacker's model (.zip)")
     ap.add_argument("--train-attacker", action="store_true", help="train the ppo attacker, then stop")
     ap.add_argument("--timesteps", type=positive_int, default=300_000, help="--train-attacker's training steps")
@@ -243,14 +266,18 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         return []
     if "ppo" in args.attackers and not args.attacker_model:
         ap.error("argument --attackers: ppo needs --attacker-model (train one with --train-attacker)")
-    todo_sites = sites(None if args.quick else args.maps)
+    todo_sites = sites(None if args.quick or args.tight else args.maps, args.seed)
     if args.quick:
-        todo_sites = [s for s in todo_sites if s["env_id"] in (STATIC[0], STATIC[1], DYNAMIC[0])]
+        todo_sites = [s for s in todo_sites if (s["site"] in QUICK_TIGHT if s["worlds"] == "tight" else s["env_id"] in (STATIC[0], STATIC[1], DYNAMIC[0]))]
         args.episodes = min(args.episodes, 48)
-    static = [s for s in todo_sites if not s["dynamic"]]
-    per_cell = max(1, math.ceil(args.episodes / (len(static) * len(args.attackers))))
+    if args.tight:
+        todo_sites = [s for s in todo_sites if s["worlds"] == "tight"]
+    # --episodes over the static sites and again over the tight ones; the moving site as a static one
+    count = {w: sum(s["worlds"] == w for s in todo_sites) for w in WORLDS}
+    per_cell = {w: max(1, math.ceil(args.episodes / (max(count[w], 1) * len(args.attackers)))) for w in ("static", "tight")}
+    per_cell["moving"] = per_cell["static"]
     todo = [
-        {**s, "shield": shield, "attacker": attacker, "episodes": per_cell, "steps": args.steps, "seed": args.seed + 1000 * k,
+        {**s, "shield": shield, "attacker": attacker, "episodes": per_cell[s["worlds"]], "steps": args.steps, "seed": args.seed + 1000 * k,
          "num_envs": args.num_envs, "threads": args.workers, "model": args.attacker_model}
         for shield in args.shields for k, attacker in enumerate(args.attackers) for s in todo_sites
     ]

@@ -160,6 +160,51 @@ def test_map_paths_expand_home_and_an_image_is_named_as_not_the_yaml(tmp_path, m
         gym.make("shieldnav/MapInspection-v0", map_path=str(image))
 
 
+def test_a_site_keyword_given_replaces_the_ids_own_site(tmp_path):
+    # Gymnasium merges an id's registered keywords with the user's: scenario_path= on the
+    # procedural id was refused as "got procedural=True, scenario_path"
+    import json
+
+    from shieldnav.maps import DEFAULT_MAP
+
+    walls = [{"a": [0, -1], "b": [12, -1], "height": 2.0}, {"a": [0, 1], "b": [12, 1], "height": 2.0}]
+    path = tmp_path / "corridor.json"
+    path.write_text(json.dumps({"name": "my_corridor", "walls": walls, "start": {"x": 2, "y": 0, "yaw": 0}}))
+    env = gym.make("shieldnav/CorridorInspection-v0", scenario_path=str(path))
+    for seed in (0, 1):
+        _, info = env.reset(seed=seed)
+        assert info["site"] == "my_corridor"
+        for _ in range(5):
+            _, _, terminated, truncated, info = env.step(np.array([1.0, 0.0, 0.0], np.float32))
+            assert not (terminated or truncated) and info["cost"] == 0
+    assert env.unwrapped.episode.true_pose[0] > 2.0
+    env.close()
+    vec = gym.make_vec("shieldnav/CorridorInspection-v0", num_envs=2, vectorization_mode="vector_entry_point", scenario_path=str(path))
+    assert list(vec.reset(seed=0)[1]["site"]) == ["my_corridor"] * 2
+    vec.step(np.zeros((2, 3), np.float32))
+    vec.close()
+    # a map on a preset id, a preset or a procedural site on the map id
+    env = gym.make("shieldnav/ConstrictedPassage-v0", map_path=str(DEFAULT_MAP))
+    assert env.reset(seed=0)[1]["site"] == gym.make("shieldnav/MapInspection-v0").reset(seed=0)[1]["site"]
+    assert env.unwrapped.preset is None
+    assert gym.make("shieldnav/MapInspection-v0", preset="odometry_jump").unwrapped.preset == "odometry_jump"
+    gym.make("shieldnav/MapInspection-v0", procedural=True).reset(seed=0)
+    # procedural=False chooses no site: the preset id keeps its own, the procedural id has none left
+    assert gym.make("shieldnav/ConstrictedPassage-v0", procedural=False).unwrapped.preset == "constricted_passage"
+    with pytest.raises(InvalidArgumentError, match=r"exactly one of .* \(got none\)"):
+        gym.make("shieldnav/CorridorInspection-v0", procedural=False)
+    # two sites given are still refused, both named
+    for env_id, kwargs, named in [
+        ("shieldnav/CorridorInspection-v0", dict(procedural=True, scenario_path=str(path)), "procedural=True, scenario_path"),
+        ("shieldnav/ConstrictedPassage-v0", dict(preset="constricted_passage", map_path=str(DEFAULT_MAP)), "preset, map_path"),
+        ("shieldnav/MapInspection-v0", dict(map_path=str(DEFAULT_MAP), scenario_path=str(path)), "map_path, scenario_path"),
+    ]:
+        with pytest.raises(InvalidArgumentError, match=rf"give exactly one of preset, procedural=True, map_path, scenario_path \(got {named}\)"):
+            gym.make(env_id, **kwargs)
+        with pytest.raises(InvalidArgumentError, match=rf"\(got {named}\)"):
+            gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", **kwargs)
+
+
 @pytest.mark.parametrize("kwargs", [{"action_mode": "world", "shield": "none"},
                                     {"action_mode": "waypoint", "shield": "none", "controller_u_max": [2.0, 2.0]}])
 def test_unshielded_world_and_waypoint_commands_stay_in_the_space(kwargs):

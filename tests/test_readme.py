@@ -22,7 +22,7 @@ def test_readme_block_runs(k):
     if "out" in namespace:  # the shield's block: a point 1 m ahead slows the robot down
         assert namespace["out"].num_points == 3 and namespace["out"].u[0] < 1.0
         assert namespace["out3"].num_points == 1 and namespace["out3"].u.shape == (3,)
-    if "brk" in namespace:  # the braking shield's block: full speed 1.4 m from a wall brakes
+    if "brk" in namespace:  # the braking shield's block: full speed, the nose 0.65 m from a wall, brakes
         assert namespace["brk"].braked and not namespace["brk"].u.any()
     if "agent" in namespace:  # the scripted agent's episode of Scenario 1 ends without contact
         episode = namespace["info"]["shieldnav_episode"]

@@ -46,7 +46,7 @@ def test_world_procedural_sites_admit_the_robot_given():
 @pytest.mark.parametrize(
     "kw, message",
     [
-        (dict(map_path="x.yaml"), "exactly one of preset, procedural=True, map_path, scenario_path \\(got preset, map_path\\)"),
+        (dict(preset="constricted_passage", map_path="x.yaml"), "exactly one of preset, procedural=True, map_path, scenario_path \\(got preset, map_path\\)"),
         (dict(procedural=7), "`procedural`: expected True or False, got 7"),
         (dict(lidar_vertical_fov=(-0.3, 0.3)), "`lidar_vertical_fov`"),
     ],

@@ -52,6 +52,10 @@ class ShieldOutcome:
     def recovering(self) -> bool: ...
     @property
     def sweep_h(self) -> float: ...
+    @property
+    def tight(self) -> bool: ...
+    @property
+    def clearance(self) -> float: ...
 
 @final
 class Shield:
@@ -78,6 +82,9 @@ class Shield:
         dt: float = ...,
         brake_margin: float = ...,
         rotation_weight: float = ...,
+        footprint: tuple[float, float] | Sequence[Sequence[float]] | npt.ArrayLike | None = ...,
+        lidar_noise_std: float = ...,
+        tight_speed: float = ...,
     ) -> Shield: ...
     def filter(
         self,

@@ -18,14 +18,26 @@ from shieldnav.exceptions import InvalidArgumentError
 ENV_DEFAULTS: Mapping[str, Any] = MappingProxyType({k: tuple(v) if isinstance(v, list) else v for k, v in episode_defaults().items()})
 
 _OBSERVATIONS = ("flat", "dict")
+#: The keywords that choose the site (exactly one is given).
+SITE_KEYS = ("preset", "procedural", "map_path", "scenario_path")
 #: Bound (m) of odometry quantities in the observation spaces: far beyond any site (walls lie
 #: within 1e5 m of the origin), finite so that checkers accept the space.
 _POSE_BOUND = 1.0e9
 
 
-def site_args(preset: str | None, procedural: bool, map_path: Any, scenario_path: Any) -> dict[str, Any]:
+def site_args(preset: str | None, procedural: bool | None, map_path: Any, scenario_path: Any, default_site: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The site keywords of the Rust ``Episode`` and ``Batch`` (a path may start with ``~``),
-    checked as the environments name them."""
+    checked as the environments name them. ``default_site`` (a registered id's own site, e.g.
+    ``{"procedural": True}``) applies when none of the four chooses a site; a site given
+    replaces it, so that ``scenario_path=`` on a procedural id is that scenario."""
+    if default_site is not None and (not isinstance(default_site, Mapping) or not set(default_site) <= set(SITE_KEYS)):
+        raise InvalidArgumentError(f"invalid `default_site`: expected a mapping of {', '.join(SITE_KEYS)}, got {default_site!r}")
+    given = {k: v for k, v in zip(SITE_KEYS, (preset, procedural, map_path, scenario_path)) if v is not None}
+    # (procedural=False chooses no site: the id's applies, under it)
+    if default_site and not any(k != "procedural" or not isinstance(v, (bool, np.bool_)) or v for k, v in given.items()):
+        given = {**default_site, **given}
+    preset, procedural, map_path, scenario_path = (given.get(k) for k in SITE_KEYS)
+    procedural = False if procedural is None else procedural
     if not isinstance(procedural, (bool, np.bool_)):
         raise InvalidArgumentError(f"invalid `procedural`: expected True or False, got {procedural!r}")
     if preset is not None and not isinstance(preset, str):
@@ -33,9 +45,9 @@ def site_args(preset: str | None, procedural: bool, map_path: Any, scenario_path
     for name, value in (("map_path", map_path), ("scenario_path", scenario_path)):
         if value is not None and not isinstance(value, (str, os.PathLike)):
             raise InvalidArgumentError(f"invalid `{name}`: expected a file path (str or os.PathLike), got {value!r}")
-    given = [k for k, v in (("preset", preset), ("procedural=True", procedural or None), ("map_path", map_path), ("scenario_path", scenario_path)) if v is not None]
-    if len(given) != 1:
-        raise InvalidArgumentError(f"invalid site: give exactly one of preset, procedural=True, map_path, scenario_path (got {', '.join(given) or 'none'})")
+    chosen = [k for k, v in (("preset", preset), ("procedural=True", procedural or None), ("map_path", map_path), ("scenario_path", scenario_path)) if v is not None]
+    if len(chosen) != 1:
+        raise InvalidArgumentError(f"invalid site: give exactly one of preset, procedural=True, map_path, scenario_path (got {', '.join(chosen) or 'none'})")
     path = lambda p: None if p is None else os.path.expanduser(p)  # noqa: E731
     return dict(preset=preset, procedural=bool(procedural), ros_map=path(map_path), scenario=path(scenario_path))
 
@@ -121,6 +133,9 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
 
     ## Arguments
     ``preset`` / ``procedural`` / ``map_path`` / ``scenario_path``: the site (exactly one).
+    ``default_site``: the site when none of those is given (each registered id sets its own,
+    e.g. ``{"procedural": True}``); a site keyword given replaces it, so
+    ``gym.make("shieldnav/CorridorInspection-v0", scenario_path="my.json")`` runs that file.
     ``observation``: ``"flat"`` or ``"dict"``. ``render_mode``: ``"rgb_array"`` or ``"human"``.
     ``report_timing``: put the shield's wall time in ``info["solve_time_ns"]`` and its mean and
     maximum in ``info["shieldnav_episode"]`` (``solve_time_mean_ns``, ``solve_time_max_ns``;
@@ -143,9 +158,10 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
         self,
         *,
         preset: str | None = None,
-        procedural: bool = False,
+        procedural: bool | None = None,
         map_path: str | None = None,
         scenario_path: str | None = None,
+        default_site: Mapping[str, Any] | None = None,
         observation: str = "flat",
         render_mode: str | None = None,
         report_timing: bool = False,
@@ -160,7 +176,7 @@ class CorridorInspectionEnv(gym.Env[Any, np.ndarray]):
             )
         if "seed" in config:
             raise InvalidArgumentError("invalid `seed`: not an environment keyword; seed the episodes with reset(seed=...)")
-        self._site = site_args(preset, procedural, map_path, scenario_path)
+        self._site = site_args(preset, procedural, map_path, scenario_path, default_site)
         self._episode = Episode(**self._site, seed=0, **config)
         self.config = {**ENV_DEFAULTS, **config}
         self.observation_mode = observation

@@ -2,6 +2,7 @@
 
 from gymnasium.envs.registration import register, registry
 
+from shieldnav.env import SITE_KEYS
 from shieldnav.maps import DEFAULT_MAP
 
 _ENTRY = "shieldnav.env:CorridorInspectionEnv"
@@ -26,11 +27,16 @@ def register_envs() -> None:
     """Registers every id of `ENV_IDS` (once)."""
     for env_id, (kwargs, steps) in ENV_IDS.items():
         if env_id not in registry:
+            # the id's site is registered as `default_site`, not as site keywords: Gymnasium merges
+            # the registered keywords with the user's, and a site the user gives (say scenario_path=)
+            # must replace the id's (procedural=True), not join it
+            site = {k: v for k, v in kwargs.items() if k in SITE_KEYS}
+            rest = {k: v for k, v in kwargs.items() if k not in SITE_KEYS}
             # the episode applies its time limit itself (its last step carries the summary), so no
             # TimeLimit wrapper is registered; gym.make(..., max_episode_steps=N) still adds one
             register(
                 id=env_id,
                 entry_point=_ENTRY,
                 vector_entry_point="shieldnav.vector:make_vector",
-                kwargs={**kwargs, "time_limit": steps},
+                kwargs={"default_site": site, **rest, "time_limit": steps},
             )

@@ -141,10 +141,7 @@ def _target(env_id: str) -> tuple[str, dict[str, Any]]:
     if suffix not in _FILE_SITES:
         return env_id, {}
     gym_id, key = _FILE_SITES[suffix]
-    site: dict[str, Any] = {key: env_id}
-    if key == "scenario_path":
-        site["procedural"] = False
-    return gym_id, site
+    return gym_id, {key: env_id}
 
 
 def _check_env_ids(env_ids: Any) -> list[str]:

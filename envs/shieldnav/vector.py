@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numbers
 import os
-from typing import Any
+from typing import Any, Mapping
 
 import gymnasium as gym
 import numpy as np
@@ -104,9 +104,10 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         num_envs: int,
         *,
         preset: str | None = None,
-        procedural: bool = False,
+        procedural: bool | None = None,
         map_path: str | None = None,
         scenario_path: str | None = None,
+        default_site: Mapping[str, Any] | None = None,
         autoreset_mode: str = "next_step",
         threads: int | None = None,
         max_episode_steps: int | None = None,
@@ -130,12 +131,12 @@ class CorridorInspectionVectorEnv(VectorEnv[Any, np.ndarray, np.ndarray]):
         threads = threads if threads is not None else len(os.sched_getaffinity(0))
         limits = [v for v in (max_episode_steps, time_limit) if v is not None]
         limit = min(limits) if limits else None
-        site = site_args(preset, procedural, map_path, scenario_path)
+        site = site_args(preset, procedural, map_path, scenario_path, default_site)
         self._seeds = EpisodeSeeds(num_envs)
         first = self._seeds.reseed(list(range(num_envs)))
         self._next = self._seeds.draw(np.ones(num_envs, bool))
         self._batch = Batch(num_envs, first, autoreset_mode=autoreset_mode, threads=threads, time_limit=limit, **site, **config)
-        single = CorridorInspectionEnv(preset=preset, procedural=procedural, map_path=map_path, scenario_path=scenario_path, **config)
+        single = CorridorInspectionEnv(preset=preset, procedural=procedural, map_path=map_path, scenario_path=scenario_path, default_site=default_site, **config)
         self.num_envs = num_envs
         self.single_observation_space = single.observation_space
         self.single_action_space = single.action_space

@@ -141,6 +141,7 @@ impl PyBatch {
         info.set_item("shield_feasible", flag(&|s| s.report.shield_feasible))?;
         info.set_item("shield_braked", flag(&|s| s.report.shield_braked))?;
         info.set_item("shield_recovering", flag(&|s| s.report.shield_recovering))?;
+        info.set_item("shield_tight", flag(&|s| s.report.shield_tight))?;
         info.set_item("intervention", col(&|s| s.report.intervention))?;
         info.set_item("coverage", col(&|s| s.report.coverage))?;
         info.set_item("new_coverage", col(&|s| s.report.new_coverage))?;

@@ -52,6 +52,7 @@ fn info<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
     d.set_item(intern!(py, "shield_feasible"), r.shield_feasible)?;
     d.set_item(intern!(py, "shield_braked"), r.shield_braked)?;
     d.set_item(intern!(py, "shield_recovering"), r.shield_recovering)?;
+    d.set_item(intern!(py, "shield_tight"), r.shield_tight)?;
     d.set_item(intern!(py, "intervention"), r.intervention)?;
     d.set_item(intern!(py, "u_nom"), PyArray1::from_slice(py, &r.u_nom))?;
     d.set_item(intern!(py, "u_filtered"), PyArray1::from_slice(py, &r.u_filtered))?;
@@ -83,6 +84,7 @@ pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<
     d.set_item("shield_infeasible_steps", s.shield_infeasible_steps)?;
     d.set_item("shield_braked_steps", s.shield_braked_steps)?;
     d.set_item("shield_recovering_steps", s.shield_recovering_steps)?;
+    d.set_item("shield_tight_steps", s.shield_tight_steps)?;
     d.set_item("min_clearance", s.min_clearance)?;
     d.set_item("min_h", s.min_h)?;
     d.set_item("solve_time_mean_ns", s.solve_time_mean_ns)?;

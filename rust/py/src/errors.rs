@@ -181,6 +181,22 @@ fn opt_pair_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Opti
     reals_arg::<2>(name, obj, what).map(|[a, b]| Some((a, b)))
 }
 
+fn footprint_arg(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Option<shieldnav_core::shield::Footprint>> {
+    use shieldnav_core::shield::Footprint;
+    if obj.is_none() {
+        return Ok(None);
+    }
+    refuse_bool_complex(obj, name)?;
+    if obj.is_instance_of::<pyo3::types::PyString>() {
+        return Err(invalid(name, format!("expected {what}, got {}", repr(obj))));
+    }
+    if let Ok([length, width]) = obj.extract::<[f64; 2]>() {
+        return Footprint::rectangle(length, width).map(Some).map_err(to_py);
+    }
+    let vertices = obj.extract::<Vec<[f64; 2]>>().map_err(|_| invalid(name, format!("expected {what}, got {}", repr(obj))))?;
+    Footprint::polygon(&vertices).map(Some).map_err(to_py)
+}
+
 /// The `Shield` keywords, each read with its own name in every error.
 pub mod shield_args {
     use super::*;
@@ -202,5 +218,8 @@ pub mod shield_args {
     named_arg!(dt, f64, real_arg, "dt", "the control period in s");
     named_arg!(brake_margin, f64, real_arg, "brake_margin", "the braking check's margin in m");
     named_arg!(rotation_weight, f64, real_arg, "rotation_weight", "the weight of a turn against a speed");
+    named_arg!(lidar_noise_std, f64, real_arg, "lidar_noise_std", "the range noise's standard deviation in m");
+    named_arg!(tight_speed, f64, real_arg, "tight_speed", "the tight-space speed in m/s");
+    named_arg!(footprint, Option<shieldnav_core::shield::Footprint>, footprint_arg, "footprint", "(length, width) in m, an (M, 2) convex polygon in m, or None");
     named_arg!(yaw, Option<f64>, opt_real_arg, "yaw", "the heading in rad, or None");
 }

@@ -43,21 +43,36 @@ impl PyShieldOutcome {
             Ok(PyArray1::from_slice(py, w).into_any().unbind())
         }
     }
-    /// The braking check refused the row's command: u and omega are the brake (0).
+    /// The braking check found no safe fraction of the row's nor of the tight-space command:
+    /// u and omega are the brake (0).
     #[getter]
     fn braked(&self) -> bool {
         self.inner.braked
     }
-    /// The ellipse holds a point: the command raises H fastest within the box, unchecked.
+    /// The ellipse holds a point: the row's command raises H fastest within the box; the
+    /// braking check still decides how much of it is sent.
     #[getter]
     fn recovering(&self) -> bool {
         self.inner.recovering
     }
-    /// The braking check's least h against the ellipse swept until the robot stands (>= 0
-    /// passes); NaN when no check ran.
+    /// The braking check's margin for the row's full command (m): the least clearance of the
+    /// footprint swept until the robot stands, less the clearance required (>= 0 passes);
+    /// NaN when no check ran.
     #[getter]
     fn sweep_h(&self) -> f64 {
         self.inner.sweep_h
+    }
+    /// The braking shield sent (a safe fraction of) the nominal command at most tight_speed:
+    /// the ellipse row stalled where the footprint passes.
+    #[getter]
+    fn tight(&self) -> bool {
+        self.inner.tight
+    }
+    /// The least clearance (m) of the standing footprint to the points the check used
+    /// (sys.float_info.max when none is within reach); NaN when no check ran.
+    #[getter]
+    fn clearance(&self) -> f64 {
+        self.inner.clearance
     }
     /// dH/dt caused by the robot's rotation.
     #[getter(dH_dt)]

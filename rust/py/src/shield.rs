@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use shieldnav_core::math::{rot_z, Mat3};
 use shieldnav_core::robot::TrackerConfig;
-use shieldnav_core::shield::{BodyState, BrakingModel, LinearConstraints, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod};
+use shieldnav_core::shield::{BodyState, BrakingModel, Footprint, LinearConstraints, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod};
 
 use crate::errors::{invalid, to_py};
 use crate::outcome::PyShieldOutcome;
@@ -59,7 +59,8 @@ impl<'py> PointsArg<'py> {
 /// Shield(semi_axes=(0.9, 0.45), gamma=0.9, kappa=8.0, alpha=2.0, crop_radius=3.5, u_max=None,
 ///        method="composite", safety_distance=0.8, height_band=(-0.4, 1.5), voxel_size=None,
 ///        angular_bins=None, grad_eps=1e-9, tracker_tau=0.15, a_max=(2.0, 2.0), w_max=1.5,
-///        yaw_accel_max=4.0, dt=0.02, brake_margin=0.03, rotation_weight=4.0)
+///        yaw_accel_max=4.0, dt=0.02, brake_margin=0.01, rotation_weight=4.0, footprint=None,
+///        lidar_noise_std=0.01, tight_speed=0.5)
 ///
 /// The composite control-barrier-function safety shield (paper Sec. III) and its baselines.
 ///
@@ -70,9 +71,12 @@ impl<'py> PointsArg<'py> {
 /// `method="braking"` filters the rotation too: (u, omega) nearest (u_nom, omega) with
 /// dH/dp . u + dH/domega . omega >= -alpha H, |u| <= u_max, |omega| <= w_max; a planar one
 /// then checks that after one period `dt` of that command the robot, whose velocity follows
-/// a lag `tracker_tau` with acceleration limits `a_max`, `yaw_accel_max`, can still brake to a stop with
-/// its ellipse free, and brakes (command 0) if not. It needs `velocity=(vx, vy, omega)`, the
-/// body's measured velocity, at every call.
+/// a lag `tracker_tau` with acceleration limits `a_max`, `yaw_accel_max`, can still brake to
+/// a stop with its footprint at least brake_margin + 3 lidar_noise_std from every point. It
+/// sends the largest safe fraction of that command, or, where the row stalls (the ellipse
+/// does not fit where the body does), of the nominal command at most `tight_speed`, or the
+/// brake. With a point already nearer than that clearance, only commands that bring no point
+/// nearer pass. It needs `velocity=(vx, vy, omega)`, the body's measured velocity, at every call.
 ///
 /// Arguments:
 ///     semi_axes: body-frame ellipsoid semi-axes (m); 2 values planar, 3 values 3D.
@@ -92,8 +96,14 @@ impl<'py> PointsArg<'py> {
 ///         limits in m/s^2, yaw-rate limit in rad/s, yaw acceleration limit in rad/s^2) and
 ///         control period (s), for method "braking"; its speed limit is u_max (default
 ///         (1.6, 0.8)).
-///     brake_margin: clearance (m) the braking check keeps beyond the swept ellipse, for
-///         range noise and the gaps between beams.
+///     brake_margin: clearance (m) the braking check keeps between the footprint and every
+///         point beyond three standard deviations of the range noise (gaps between beams).
+///     footprint: the body's outline for the braking check: (length, width) of a centred
+///         rectangle, or a convex polygon [[x, y], ...] (m, body frame, Nav2's `footprint`
+///         convention) holding the origin; None: 1.1 x 0.5 m.
+///     lidar_noise_std: the range noise's standard deviation (m): the check keeps 3 of them.
+///     tight_speed: speed (m/s) up to which the braking shield follows the nominal command
+///         where the ellipse row stalls but the footprint passes; 0 keeps the row's command.
 ///     rotation_weight: w in min |u - u_nom|^2 + w^2 |omega - omega_nom|^2 (method
 ///         "braking"): large, the filter changes the translation first.
 ///
@@ -127,6 +137,9 @@ impl PyShield {
         dt = BrakingModel::default().dt,
         brake_margin = BrakingModel::default().brake_margin,
         rotation_weight = ShieldConfig::default().rotation_weight,
+        footprint = None,
+        lidar_noise_std = BrakingModel::default().lidar_noise_std,
+        tight_speed = ShieldConfig::default().tight_speed,
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -149,6 +162,9 @@ impl PyShield {
         #[pyo3(from_py_with = crate::errors::shield_args::dt)] dt: f64,
         #[pyo3(from_py_with = crate::errors::shield_args::brake_margin)] brake_margin: f64,
         #[pyo3(from_py_with = crate::errors::shield_args::rotation_weight)] rotation_weight: f64,
+        #[pyo3(from_py_with = crate::errors::shield_args::footprint)] footprint: Option<Footprint>,
+        #[pyo3(from_py_with = crate::errors::shield_args::lidar_noise_std)] lidar_noise_std: f64,
+        #[pyo3(from_py_with = crate::errors::shield_args::tight_speed)] tight_speed: f64,
     ) -> PyResult<Self> {
         let mut tracker = TrackerConfig { tau: tracker_tau, a_max, w_max, alpha_max: yaw_accel_max, ..TrackerConfig::default() };
         if let Some(m) = u_max.as_deref().filter(|m| m.len() == 2) {
@@ -165,8 +181,9 @@ impl PyShield {
             safety_distance,
             scan: ScanFilter { crop_radius, height_band, voxel_size, angular_bins },
             grad_eps,
-            braking: BrakingModel { tracker, dt, brake_margin },
+            braking: BrakingModel { tracker, dt, brake_margin, lidar_noise_std, footprint: footprint.unwrap_or_default() },
             rotation_weight,
+            tight_speed,
         };
         Ok(Self { inner: Shield::new(config).map_err(to_py)? })
     }
@@ -392,6 +409,9 @@ fn config_dict<'py>(py: Python<'py>, c: &ShieldConfig) -> PyResult<Bound<'py, Py
     d.set_item("dt", c.braking.dt)?;
     d.set_item("brake_margin", c.braking.brake_margin)?;
     d.set_item("rotation_weight", c.rotation_weight)?;
+    d.set_item("footprint", c.braking.footprint.vertices().iter().map(|v| v.to_vec()).collect::<Vec<_>>())?;
+    d.set_item("lidar_noise_std", c.braking.lidar_noise_std)?;
+    d.set_item("tight_speed", c.tight_speed)?;
     Ok(d)
 }
 

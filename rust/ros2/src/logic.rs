@@ -67,8 +67,13 @@ pub struct State {
     pub feasible: bool,
     /// The braking check sent the brake.
     pub braked: bool,
-    /// A point is inside the ellipse: the braking shield's recovery command.
+    /// A point is inside the ellipse: the row's command is the recovery (still checked).
     pub recovering: bool,
+    /// The braking shield sent the tight-space command (the ellipse stalls, the body passes).
+    pub tight: bool,
+    /// The standing footprint's least clearance to the scan (m; null when no check ran or no
+    /// point is within reach).
+    pub clearance: Option<f64>,
     /// Points the shield used (after crop, band and down-sampling).
     pub points_used: usize,
     /// Returns in the scan held, before the shield's crop.
@@ -260,6 +265,8 @@ impl ShieldNode {
                 feasible: false,
                 braked: false,
                 recovering: false,
+                tight: false,
+                clearance: None,
                 points_used: 0,
                 points_in_scan,
                 scan_frame,
@@ -317,7 +324,9 @@ impl ShieldNode {
         .map_err(|e| format!("body state: {e}"))?;
         let scan = Scan::new_f64(&self.points, 3).map_err(|e| format!("scan: {e}"))?;
         let out: ShieldOutcome = self.shield.filter(&scan, &state, u_nom).map_err(|e| format!("shield: {e}"))?;
-        if !out.feasible && !out.recovering && p.stop_when_infeasible {
+        // the planar braking shield's command passed its braking check whatever the row said
+        let checked = method == ShieldMethod::Braking && dim == 2;
+        if !out.feasible && !checked && p.stop_when_infeasible {
             return Err(format!("infeasible: no command in the box meets the barrier's row (H = {:.4}, h_min = {:.4})", out.value, out.h_min));
         }
         let mut cmd = Twist::default();
@@ -348,6 +357,8 @@ impl ShieldNode {
                 feasible: out.feasible,
                 braked: out.braked,
                 recovering: out.recovering,
+                tight: out.tight,
+                clearance: (out.clearance.is_finite() && out.clearance < f64::MAX).then_some(out.clearance),
                 points_used: out.num_points,
                 points_in_scan: info.points,
                 scan_frame: Some(info.frame),

@@ -7,7 +7,7 @@ use std::fmt;
 use std::time::Duration;
 
 use shieldnav_core::robot::TrackerConfig;
-use shieldnav_core::shield::{BrakingModel, ScanFilter, Shield, ShieldConfig, ShieldMethod};
+use shieldnav_core::shield::{BrakingModel, Footprint, ScanFilter, Shield, ShieldConfig, ShieldMethod};
 use yaml_rust2::{Yaml, YamlLoader};
 
 use crate::translate::Mount;
@@ -88,9 +88,12 @@ pub const PARAMETERS: &[(&str, &str)] = &[
     ("w_max", "braking model: yaw-rate limit, rad/s (default 1.5)"),
     ("yaw_accel_max", "braking model: yaw acceleration limit, rad/s² (default 4)"),
     ("dt", "braking model: control period, s (default 0.02)"),
-    ("brake_margin", "braking model: clearance kept beyond the swept ellipse, m (default 0.03)"),
+    ("brake_margin", "braking model: clearance kept between the footprint and every point beyond 3 lidar_noise_std, m (default 0.01)"),
+    ("lidar_noise_std", "braking model: the scan's range noise, m; the check keeps 3 of them (default 0.01)"),
+    ("footprint", "braking model: the body's convex outline, Nav2's convention: \"[[x, y], [x, y], ...]\" in m, body frame (default: 1.1 x 0.5 m)"),
+    ("tight_speed", "braking shield: speed up to which the nominal command is followed where the ellipse stalls but the footprint passes, m/s (default 0.5)"),
     ("rotation_weight", "braking shield: weight of a change of ω against one of v (default 4)"),
-    ("stop_when_infeasible", "send zero when the constraints cannot be met (the braking shield's recovery excepted) (default true)"),
+    ("stop_when_infeasible", "send zero when the constraints cannot be met (the planar braking shield excepted: its braking check decides) (default true)"),
     ("scan_topic", "sensor_msgs/LaserScan in; empty: none (default /scan)"),
     ("cloud_topic", "sensor_msgs/PointCloud2 in; empty: none (default empty)"),
     ("nominal_topic", "nominal geometry_msgs/Twist in (default /cmd_vel_nominal)"),
@@ -315,8 +318,15 @@ impl RawParams {
             safety_distance: g.float("safety_distance", d.safety_distance)?,
             scan: ScanFilter { crop_radius: g.opt_float("crop_radius", d.scan.crop_radius)?, height_band, voxel_size: g.opt_float("voxel_size", d.scan.voxel_size)?, angular_bins },
             grad_eps: g.float("grad_eps", d.grad_eps)?,
-            braking: BrakingModel { tracker, dt: g.float("dt", braking_default.dt)?, brake_margin: g.float("brake_margin", braking_default.brake_margin)? },
+            braking: BrakingModel {
+                tracker,
+                dt: g.float("dt", braking_default.dt)?,
+                brake_margin: g.float("brake_margin", braking_default.brake_margin)?,
+                lidar_noise_std: g.float("lidar_noise_std", braking_default.lidar_noise_std)?,
+                footprint: g.footprint("footprint", braking_default.footprint)?,
+            },
             rotation_weight: g.float("rotation_weight", d.rotation_weight)?,
+            tight_speed: g.float("tight_speed", d.tight_speed)?,
         };
         // the core's checks, whose errors name the field (its names are the parameters')
         Shield::new(shield.clone()).map_err(core_error)?;
@@ -452,6 +462,47 @@ impl Getter<'_> {
             Some(Value::None) => Ok(String::new()),
             Some(v) => Err(ParamError::new(name, format!("expects a string, got {v}"))),
         }
+    }
+
+    /// A footprint polygon as Nav2 writes it, the string `"[[x, y], [x, y], ...]"`, or the
+    /// same as a list of pairs.
+    fn footprint(&self, name: &str, default: Footprint) -> Result<Footprint, ParamError> {
+        let bad = |what: String| ParamError::new(name, format!("expects \"[[x, y], [x, y], ...]\" (m, a convex polygon), {what}"));
+        let pair = |v: &Value| -> Option<[f64; 2]> {
+            let num = |v: &Value| match v {
+                Value::Float(x) => Some(*x),
+                Value::Int(i) => Some(*i as f64),
+                _ => None,
+            };
+            match v {
+                Value::List(p) if p.len() == 2 => Some([num(&p[0])?, num(&p[1])?]),
+                _ => None,
+            }
+        };
+        let vertices: Vec<[f64; 2]> = match self.get(name) {
+            None => return Ok(default),
+            Some(Value::Str(s)) => {
+                let body = s.trim();
+                let inner = body.strip_prefix('[').and_then(|b| b.strip_suffix(']')).ok_or_else(|| bad(format!("got {s:?}")))?;
+                let mut out = Vec::new();
+                for part in inner.split(']') {
+                    let part = part.trim().trim_start_matches(',').trim();
+                    if part.is_empty() {
+                        continue;
+                    }
+                    let nums = part.strip_prefix('[').ok_or_else(|| bad(format!("got {s:?}")))?;
+                    let xy: Vec<f64> = nums.split(',').map(|t| t.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad(format!("got {s:?}")))?;
+                    match xy[..] {
+                        [x, y] => out.push([x, y]),
+                        _ => return Err(bad(format!("got {s:?}"))),
+                    }
+                }
+                out
+            }
+            Some(Value::List(l)) => l.iter().map(|v| pair(v).ok_or_else(|| bad(format!("found {v}")))).collect::<Result<_, _>>()?,
+            Some(v) => return Err(bad(format!("got {v}"))),
+        };
+        Footprint::polygon(&vertices).map_err(core_error)
     }
 
     fn floats(&self, name: &str, default: Vec<f64>) -> Result<Vec<f64>, ParamError> {

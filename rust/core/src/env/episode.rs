@@ -8,7 +8,7 @@ use crate::control::{NominalController, NominalControllerConfig};
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::planner::ViewPlannerConfig;
-use crate::shield::{move_points, BodyState, BrakingModel, Motion, Scan as PointScan, Shield, ShieldConfig, ShieldMethod, ShieldOutcome};
+use crate::shield::{move_points, BodyState, BrakingModel, Footprint, Motion, Scan as PointScan, Shield, ShieldConfig, ShieldMethod, ShieldOutcome};
 use crate::sim::{World, WorldConfig};
 use crate::world::generate::{generate, GeneratorConfig};
 use crate::world::{preset, wrap_angle, Pose2, Scenario};
@@ -72,10 +72,12 @@ pub struct EpisodeConfig {
     /// Truncate the episode after this many steps (the registered time limit); `None`: never.
     pub time_limit: Option<u64>,
     /// When the shield reports its constraint infeasible, stop (translation and rotation).
-    /// Off: send the shield's documented least-violating command. The braking shield never
-    /// stops while it recovers (a point inside the ellipse): it sends the command that raises
-    /// `H` fastest within the box.
+    /// Off: send the shield's documented least-violating command. The braking shield's
+    /// command is sent as it is: its braking check already decided it (or the brake).
     pub stop_when_infeasible: bool,
+    /// The footprint the braking shield keeps off the points: a convex polygon (body frame,
+    /// m, Nav2's `footprint` convention); `None`: the robot's `length × width` rectangle.
+    pub footprint: Option<Vec<[Real; 2]>>,
 }
 
 impl Default for EpisodeConfig {
@@ -97,6 +99,7 @@ impl Default for EpisodeConfig {
             goal_tolerance: 0.5,
             stop_when_infeasible: true,
             time_limit: None,
+            footprint: None,
         }
     }
 }
@@ -151,6 +154,8 @@ pub struct StepReport {
     pub shield_braked: bool,
     /// The braking shield is moving the robot out of an ellipse that holds a point.
     pub shield_recovering: bool,
+    /// The braking shield sent the tight-space command: the ellipse does not fit, the body does.
+    pub shield_tight: bool,
     /// `‖u* − u_nom‖` (m/s).
     pub intervention: Real,
     /// Nominal body-frame command `(v_x, v_y, ω)`.
@@ -209,6 +214,8 @@ pub struct EpisodeSummary {
     pub shield_braked_steps: u64,
     /// Steps where the braking shield recovered from an ellipse holding a point.
     pub shield_recovering_steps: u64,
+    /// Steps where the braking shield sent the tight-space command.
+    pub shield_tight_steps: u64,
     /// Smallest true clearance (m).
     pub min_clearance: Real,
     /// Smallest `min_i h_i`.
@@ -272,7 +279,13 @@ impl Episode {
         if config.shield.u_max.is_none() {
             config.shield.u_max = Some(config.world.tracker.v_max.to_vec());
         }
-        config.shield.braking = BrakingModel { tracker: config.world.tracker, dt: config.world.dt, ..config.shield.braking };
+        config.world.robot.validate()?;
+        let footprint = match &config.footprint {
+            Some(v) => Footprint::polygon(v)?,
+            None => Footprint::rectangle(config.world.robot.length, config.world.robot.width)?,
+        };
+        // the check keeps three standard deviations of the LIDAR's range noise beyond brake_margin
+        config.shield.braking = BrakingModel { tracker: config.world.tracker, dt: config.world.dt, lidar_noise_std: config.world.lidar.range_noise_std, footprint, ..config.shield.braking };
         if config.time_limit == Some(0) {
             return Err(Error::invalid("time_limit", "must be at least 1 step (or None)"));
         }
@@ -432,12 +445,8 @@ impl Episode {
         let state = BodyState::planar(0.0, omega)?.with_velocity(self.velocity)?;
         let out = self.shield.filter(&scan, &state, &u_nom[..2])?;
         let u = if self.config.shield.method == ShieldMethod::Braking {
-            // the brake is the braking shield's safe fallback; inside the ellipse it recovers
-            if out.feasible || out.recovering || !self.config.stop_when_infeasible {
-                [out.u[0], out.u[1], out.omega[2]]
-            } else {
-                [0.0; 3]
-            }
+            // every command of the braking shield passed its braking check (the brake included)
+            [out.u[0], out.u[1], out.omega[2]]
         } else if out.feasible || !self.config.stop_when_infeasible {
             [out.u[0], out.u[1], omega]
         } else {
@@ -481,6 +490,7 @@ impl Episode {
             shield_feasible: out.feasible,
             shield_braked: out.braked,
             shield_recovering: out.recovering,
+            shield_tight: out.tight,
             intervention,
             u_nom: [u_nom[0], u_nom[1], omega],
             u_filtered: u,
@@ -512,6 +522,7 @@ impl Episode {
         s.shield_infeasible_steps += !out.feasible as u64;
         s.shield_braked_steps += out.braked as u64;
         s.shield_recovering_steps += out.recovering as u64;
+        s.shield_tight_steps += out.tight as u64;
         s.min_clearance = s.min_clearance.min(clearance);
         s.min_h = s.min_h.min(out.h_min);
         self.solve_time_sum += out.solve_time_ns as Real;

@@ -204,6 +204,8 @@ macro_rules! each_field {
         $f!("grad_eps", shield.grad_eps);
         $f!("brake_margin", shield.braking.brake_margin);
         $f!("rotation_weight", shield.rotation_weight);
+        $f!("tight_speed", shield.tight_speed);
+        $f!("footprint", footprint);
         $f!("d_view", planner.d_view);
         $f!("gamma_h", planner.gamma_h);
         $f!("gamma_v", planner.gamma_v);
@@ -418,6 +420,7 @@ pub fn keyed(err: Error, given: &[&str]) -> Error {
     match *name {
         "mount" => keys = vec!["lidar_mount"],
         // (the procedural generator's limits on the robot)
+        "footprint" if given.contains(&"footprint") => keys = vec!["footprint"],
         "footprint" => keys = vec!["robot_length", "robot_width"],
         _ => {}
     }

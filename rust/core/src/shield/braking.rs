@@ -1,5 +1,6 @@
 //! The braking check of the `"braking"` shield: a command is sent only if, after one control
-//! period of it, the robot can still brake to a stop with its ellipse free of every point.
+//! period of it, the robot can still brake to a stop with its *footprint* (a convex polygon,
+//! grown by the clearance the check keeps) free of every point.
 //!
 //! The body does not take the command as its velocity: the tracker follows it through a
 //! first-order lag with acceleration limits ([`TrackerConfig::next_velocity`]), so from
@@ -10,24 +11,29 @@
 //!    then the brake until the robot stands, pose by pose as the body integrates
 //!    (translation at the heading of the period's start, then the turn): poses `P₀ = 0, P₁,
 //!    …, P_M` in the current body frame.
-//! 2. Cover the ellipse along that path by one convex set: the ellipse turned to the path's
-//!    middle heading `θ_ref`, grown by `ρ` (the path's largest distance `δ` from its chord
-//!    `P₀P_M`, plus `2 r sin(φ/2)` for a turn of at most `φ` either side of `θ_ref`, `r` the
-//!    longest semi-axis, plus the [`BrakingModel::brake_margin`]), swept along the chord. A disc of radius `ρ` added to an ellipse lies
-//!    inside the ellipse with semi-axes [`grow`]`(a, b, ρ)`.
-//! 3. The check value is the least `h` of the points against that swept ellipse, in closed
-//!    form per point: with `q` and `S = P_M` in the `θ_ref` frame and `Q` the grown ellipse's
-//!    shape, `t* = clamp(qᵀQS / SᵀQS, 0, 1)`, `h = (q − t*S)ᵀQ(q − t*S) − 1`.
+//! 2. Cover the footprint along that path by one convex set: the footprint turned to the
+//!    path's middle heading `θ_ref`, swept along the chord `P₀P_M` (a polygon `F ⊕ [0, S]`),
+//!    grown by `ρ`: the path's largest distance `δ` from its chord plus `2 r sin(φ/2)` for a
+//!    turn of at most `φ` either side of `θ_ref`, `r` the footprint's largest vertex radius.
+//! 3. The check value is the least clearance of the points to that set, each in closed form:
+//!    the largest of the set's half-plane distances `nᵀq − h(n)` (the footprint's edge
+//!    normals with `h(n) = h_F(n) + max(0, nᵀS)`, and the two normals across the chord), less
+//!    `ρ`. Inside the polygon it is the exact signed distance; outside it is at most the true
+//!    distance, so the test is conservative at the polygon's corners.
 //!
-//! The candidate passes when the value is ≥ 0, or, when a point already lies within the
-//! margin of the standing robot's ellipse (noise, a moving obstacle), when it is no lower
-//! than that point's value there (up to [`WORSE`]): moving away stays allowed. Otherwise
-//! the shield brakes, which is safe by induction: the state it brakes from passed the check one period earlier, the brake's
-//! path from there is the tail of the path then checked, and static points do not move.
+//! A candidate passes when that value is at least the clearance required, the
+//! [`BrakingModel::clearance`] (`brake_margin` plus three standard deviations of the range
+//! noise). When a point already lies closer than that to the standing footprint (noise, a
+//! start beside a wall, something that moved), only commands that bring no point nearer than
+//! the nearest one is pass: the swept polygon's clearance is at least the standing one and
+//! the growth at most [`TOLERANCE`]. The least clearance then never shrinks, so no sequence
+//! of small steps can ratchet the footprint onto a point. Braking is safe by
+//! induction: the state it brakes from passed the check one period earlier, the brake's path
+//! from there is the tail of the path then checked, and static points do not move.
 //! What the argument assumes: the body follows the tracker model (it does away from contact),
 //! the points are static and were seen (the swept set is convex and holds the LIDAR, so
-//! anything in it is in line of sight), and the control period and the tracker parameters
-//! are the body's own.
+//! anything in it is in line of sight), the footprint holds the body, and the control period
+//! and the tracker parameters are the body's own.
 
 use crate::error::{Error, Result};
 use crate::robot::TrackerConfig;
@@ -39,28 +45,128 @@ use crate::simd::SimdLevel;
 /// Longest brake replayed (control periods); the remaining displacement is bounded and added
 /// to the growth beyond it.
 const MAX_BRAKE_STEPS: usize = 20_000;
-/// How much lower than the standing robot's value a candidate's may be while a point lies
-/// within the margin (`h` units; about 2 mm at the default ellipse): the sweep of a robot
-/// moving straight away starts at its current pose grown by the margin and the lag's tail.
-pub const WORSE: f64 = 0.01;
+/// How far (m) the growth of a candidate's sweep (the path's bends, the turn either side of
+/// the middle heading, the lag's tail) may reach while a point lies within the required
+/// clearance: a straight motion away from the point passes, a turn toward it does not.
+pub const TOLERANCE: f64 = 1e-3;
 /// The replay stops once what the lag can still move the robot is below this (m, rad).
 const TAIL: f64 = 5e-4;
+/// Most vertices a footprint polygon may have.
+pub const MAX_FOOTPRINT_VERTICES: usize = 16;
+/// Half-planes of one swept footprint: its edges and the two across the chord.
+const MAX_PLANES: usize = MAX_FOOTPRINT_VERTICES + 2;
 
-/// The tracker the shield protects, and its control period.
+/// The robot's footprint: a convex polygon in the body frame (m, x along the heading)
+/// holding the body's origin, counter-clockwise. The braking check keeps it, grown by the
+/// required clearance, off every point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Footprint {
+    vertices: [[f64; 2]; MAX_FOOTPRINT_VERTICES],
+    len: usize,
+}
+
+impl Default for Footprint {
+    /// The default body: a 1.1 × 0.5 m rectangle (Spot).
+    fn default() -> Self {
+        Self::rectangle(1.1, 0.5).expect("the default rectangle is valid")
+    }
+}
+
+impl Footprint {
+    /// A `length × width` rectangle (m) centred on the body's origin, length along the heading.
+    pub fn rectangle(length: f64, width: f64) -> Result<Self> {
+        if !(length.is_finite() && length > 0.0 && width.is_finite() && width > 0.0) {
+            return Err(Error::invalid("footprint", format!("the rectangle's length and width must be finite and > 0, got {length} × {width}")));
+        }
+        let (l, w) = (0.5 * length, 0.5 * width);
+        Self::polygon(&[[l, w], [-l, w], [-l, -w], [l, -w]])
+    }
+
+    /// A convex polygon of 3 to [`MAX_FOOTPRINT_VERTICES`] vertices (either winding, as Nav2's
+    /// `footprint` lists them) that holds the origin strictly inside.
+    pub fn polygon(vertices: &[[f64; 2]]) -> Result<Self> {
+        let bad = |msg: String| Err(Error::invalid("footprint", msg));
+        let n = vertices.len();
+        if !(3..=MAX_FOOTPRINT_VERTICES).contains(&n) {
+            return bad(format!("a polygon of 3 to {MAX_FOOTPRINT_VERTICES} vertices is needed, got {n}"));
+        }
+        if !vertices.iter().flatten().all(|v| v.is_finite() && v.abs() <= 100.0) {
+            return bad(format!("vertices must be finite and within 100 m of the origin, got {vertices:?}"));
+        }
+        let cross = |k: usize| {
+            let (a, b, c) = (vertices[k], vertices[(k + 1) % n], vertices[(k + 2) % n]);
+            (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
+        };
+        let area2: f64 = (0..n).map(|k| vertices[k][0] * vertices[(k + 1) % n][1] - vertices[(k + 1) % n][0] * vertices[k][1]).sum();
+        let sign = area2.signum();
+        if area2.abs() < 1e-6 || (0..n).any(|k| cross(k) * sign <= 0.0) {
+            return bad(format!("the polygon must be convex with no repeated or collinear vertices, got {vertices:?}"));
+        }
+        let mut out = Self { vertices: [[0.0; 2]; MAX_FOOTPRINT_VERTICES], len: n };
+        for k in 0..n {
+            // counter-clockwise
+            out.vertices[k] = if sign > 0.0 { vertices[k] } else { vertices[n - 1 - k] };
+        }
+        if out.edges().any(|(nrm, off)| off <= 1e-6 || !(nrm[0].is_finite() && nrm[1].is_finite())) {
+            return bad(format!("the polygon must hold the robot's origin strictly inside, got {vertices:?}"));
+        }
+        Ok(out)
+    }
+
+    /// The vertices, counter-clockwise (m, body frame).
+    pub fn vertices(&self) -> &[[f64; 2]] {
+        &self.vertices[..self.len]
+    }
+
+    /// The largest distance of a vertex from the origin (m): every point of the footprint
+    /// lies within it.
+    pub fn radius(&self) -> f64 {
+        self.vertices().iter().map(|v| v[0].hypot(v[1])).fold(0.0, f64::max)
+    }
+
+    /// The outward unit normals of the edges and their offsets `h(n) = max_v nᵀv`.
+    pub fn edges(&self) -> impl Iterator<Item = ([f64; 2], f64)> + '_ {
+        let v = self.vertices();
+        (0..v.len()).map(move |k| {
+            let (a, b) = (v[k], v[(k + 1) % v.len()]);
+            let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+            let l = ex.hypot(ey);
+            let n = [ey / l, -ex / l];
+            (n, n[0] * a[0] + n[1] * a[1])
+        })
+    }
+
+    /// The support function `h(n) = max_v nᵀv`.
+    pub fn support(&self, n: [f64; 2]) -> f64 {
+        self.vertices().iter().map(|v| n[0] * v[0] + n[1] * v[1]).fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// The clearance (m) of the point `q` (body frame) to the footprint: the largest edge
+    /// distance `nᵀq − h(n)`, the signed distance inside, at most the distance outside.
+    pub fn clearance(&self, q: [f64; 2]) -> f64 {
+        self.edges().map(|(n, off)| n[0] * q[0] + n[1] * q[1] - off).fold(f64::NEG_INFINITY, f64::max)
+    }
+}
+
+/// The tracker the shield protects, its control period, and its footprint.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BrakingModel {
     /// Lag, speed and acceleration limits of the body's velocity tracker.
     pub tracker: TrackerConfig,
     /// Control period (s): a command is held this long.
     pub dt: f64,
-    /// Clearance (m) the check keeps beyond the swept ellipse, for what the scan does not
-    /// show exactly: range noise (3σ of the default LIDAR's 1 cm) and the gaps between beams.
+    /// Clearance (m) the check keeps between the footprint and every point beyond the range
+    /// noise's: the gaps between beams and what the footprint does not model.
     pub brake_margin: f64,
+    /// Standard deviation (m) of the LIDAR's range noise: the check keeps three of them more.
+    pub lidar_noise_std: f64,
+    /// The body's outline (body frame).
+    pub footprint: Footprint,
 }
 
 impl Default for BrakingModel {
     fn default() -> Self {
-        Self { tracker: TrackerConfig::default(), dt: 0.02, brake_margin: 0.03 }
+        Self { tracker: TrackerConfig::default(), dt: 0.02, brake_margin: 0.01, lidar_noise_std: 0.01, footprint: Footprint::default() }
     }
 }
 
@@ -74,18 +180,26 @@ impl BrakingModel {
         if !(self.brake_margin.is_finite() && (0.0..=10.0).contains(&self.brake_margin)) {
             return Err(Error::invalid("brake_margin", format!("must be from 0 to 10 m, got {}", self.brake_margin)));
         }
+        if !(self.lidar_noise_std.is_finite() && (0.0..=1.0).contains(&self.lidar_noise_std)) {
+            return Err(Error::invalid("lidar_noise_std", format!("must be from 0 to 1 m, got {}", self.lidar_noise_std)));
+        }
         Ok(())
     }
 
-    /// The region the ellipse covers while the robot, at body velocity `v0`, holds
+    /// The clearance (m) the check keeps: `brake_margin + 3 lidar_noise_std`.
+    pub fn clearance(&self) -> f64 {
+        self.brake_margin + 3.0 * self.lidar_noise_std
+    }
+
+    /// The region the footprint covers while the robot, at body velocity `v0`, holds
     /// `command` for one period and then brakes to a stop (current body frame).
-    pub fn sweep(&self, v0: [f64; 3], command: [f64; 3], semi_axes: [f64; 2]) -> Sweep {
-        self.sweep_with(v0, command, semi_axes, &mut Vec::new())
+    pub fn sweep(&self, v0: [f64; 3], command: [f64; 3]) -> Sweep {
+        self.sweep_with(v0, command, &mut Vec::new())
     }
 
     /// [`BrakingModel::sweep`] with the replayed path kept in `path` (cleared first), a buffer
     /// the caller reuses from call to call.
-    pub fn sweep_with(&self, v0: [f64; 3], command: [f64; 3], semi_axes: [f64; 2], path: &mut Vec<[f64; 2]>) -> Sweep {
+    pub fn sweep_with(&self, v0: [f64; 3], command: [f64; 3], path: &mut Vec<[f64; 2]>) -> Sweep {
         let t = &self.tracker;
         let dt = self.dt;
         let gain = t.gain(dt);
@@ -132,162 +246,273 @@ impl BrakingModel {
         let delta = path.iter().map(off_chord).fold(0.0, f64::max) + rest;
         let heading = 0.5 * (th_lo + th_hi);
         let half_turn = (0.5 * (th_hi - th_lo) + turn).min(std::f64::consts::PI);
-        let r = semi_axes[0].max(semi_axes[1]);
-        let rho = delta + 2.0 * r * (0.5 * half_turn).sin() + self.brake_margin;
-        let grown = grow(semi_axes[0], semi_axes[1], rho);
-        let (s, c) = heading.sin_cos();
-        Sweep { chord: [c * end[0] + s * end[1], -s * end[0] + c * end[1]], heading, semi_axes: grown, growth: rho, here: grow(semi_axes[0], semi_axes[1], self.brake_margin), first_velocity, steps }
+        let growth = delta + 2.0 * self.footprint.radius() * (0.5 * half_turn).sin();
+        Sweep::new(&self.footprint, end, heading, growth, first_velocity, steps)
     }
 }
 
-/// Semi-axes of an ellipse that holds the ellipse `(a, b)` grown by a disc of radius `rho`.
-///
-/// With `m = min(a, b)`, the support function bound `2√X ≤ X/m + m` shows that
-/// `(a + k_a ρ, b + k_b ρ)` holds the sum when `k` solves `k²ρ + 2ak = a²/m + m + ρ` for the
-/// long axis (`k = 1` for the short one): the sum's support `√(a²c² + b²s²) + ρ` never
-/// exceeds the grown ellipse's `√(a'²c² + b'²s²)` in any direction `(c, s)`.
-pub fn grow(a: f64, b: f64, rho: f64) -> [f64; 2] {
-    if rho <= 0.0 {
-        return [a, b];
-    }
-    let m = a.min(b);
-    let k = |l: f64| {
-        // k²ρ + 2lk − (l²/m + m + ρ) = 0, the positive root (written to avoid cancellation)
-        let c = l * l / m + m + rho;
-        2.0 * c / (2.0 * l + (4.0 * l * l + 4.0 * rho * c).sqrt())
-    };
-    [a + k(a) * rho, b + k(b) * rho]
+/// Half-planes `nᵀq ≤ off` of a convex set, in the current body frame: a point's clearance to
+/// the set is at least the largest `nᵀq − off`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Planes {
+    len: usize,
+    nx: [f64; MAX_PLANES],
+    ny: [f64; MAX_PLANES],
+    off: [f64; MAX_PLANES],
 }
 
-/// The ellipse swept from the robot's current pose to where it stands after braking, grown
-/// to cover the path's bends and turns (see the module docs).
+impl Planes {
+    /// The footprint's own edges: the standing robot.
+    pub fn of_footprint(fp: &Footprint) -> Self {
+        let mut p = Self { len: 0, nx: [0.0; MAX_PLANES], ny: [0.0; MAX_PLANES], off: [0.0; MAX_PLANES] };
+        for (n, off) in fp.edges() {
+            p.push(n, off);
+        }
+        p
+    }
+
+    fn push(&mut self, n: [f64; 2], off: f64) {
+        (self.nx[self.len], self.ny[self.len], self.off[self.len]) = (n[0], n[1], off);
+        self.len += 1;
+    }
+
+    /// The largest `nᵀq − off` (the clearance of `q`, exact inside the set).
+    pub fn clearance(&self, q: [f64; 2]) -> f64 {
+        (0..self.len).map(|k| self.nx[k] * q[0] + self.ny[k] * q[1] - self.off[k]).fold(f64::NEG_INFINITY, f64::max)
+    }
+}
+
+/// The footprint swept from the robot's current pose to where it stands after braking, and
+/// the growth that covers the path's bends and turns (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sweep {
-    /// The chord from the current position to the stopping point, in the `heading` frame (m).
+    /// The chord from the current position to the stopping point (m, current body frame).
     pub chord: [f64; 2],
-    /// The frame the grown ellipse is turned to (rad, from the current heading).
+    /// The heading the footprint is turned to (rad, from the current heading).
     pub heading: f64,
-    /// The grown ellipse's semi-axes (m).
-    pub semi_axes: [f64; 2],
-    /// How much the path's bends and turns and the margin grew the ellipse by (m).
+    /// How far the path's bends and turns can take the footprint beyond the swept polygon (m).
     pub growth: f64,
-    /// The ellipse at the current pose grown by the margin alone: the standing robot's.
-    pub here: [f64; 2],
+    /// The farthest any point of the swept set lies from the current position (m).
+    pub extent: f64,
     /// The body velocity after the candidate's period.
     pub first_velocity: [f64; 3],
     /// Control periods replayed.
     pub steps: usize,
+    /// The swept polygon `R(θ)F ⊕ [0, chord]`.
+    pub planes: Planes,
 }
 
 impl Sweep {
-    /// The least `h` of `pts` (rows of `stride`, moved by `motion` first, those farther than
-    /// `crop` or outside the height band skipped, as the composite skips them) against the
-    /// swept ellipse, and against the standing robot's ([`Sweep::here`]); `f64::MAX` without
-    /// points.
-    pub fn least_h<T: Lane>(&self, pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>) -> (f64, f64) {
-        let ([least], here) = least_h_of(&[*self], pts, stride, motion, crop, band, SimdLevel::detect());
-        (least, here)
+    fn new(fp: &Footprint, chord: [f64; 2], heading: f64, growth: f64, first_velocity: [f64; 3], steps: usize) -> Self {
+        let (s, c) = heading.sin_cos();
+        let turn = |n: [f64; 2]| [c * n[0] - s * n[1], s * n[0] + c * n[1]];
+        let mut planes = Planes { len: 0, nx: [0.0; MAX_PLANES], ny: [0.0; MAX_PLANES], off: [0.0; MAX_PLANES] };
+        for (n, off) in fp.edges() {
+            let n = turn(n);
+            planes.push(n, off + (n[0] * chord[0] + n[1] * chord[1]).max(0.0));
+        }
+        let len = chord[0].hypot(chord[1]);
+        if len > 1e-9 {
+            for sign in [1.0, -1.0] {
+                let n = [-sign * chord[1] / len, sign * chord[0] / len];
+                // the footprint's support across the chord, in its turned frame
+                let back = [c * n[0] + s * n[1], -s * n[0] + c * n[1]];
+                planes.push(n, fp.support(back));
+            }
+        }
+        Self { chord, heading, growth, extent: len + fp.radius() + growth, first_velocity, steps, planes }
+    }
+
+    /// The clearance (m) of the point `q` (current body frame) to the swept set: the swept
+    /// polygon's half-plane clearance less the growth.
+    pub fn clearance(&self, q: [f64; 2]) -> f64 {
+        self.planes.clearance(q) - self.growth
     }
 }
 
-/// Points handled together by [`least_h_of`]: independent minima per lane, which the compiler
-/// keeps in vector registers.
-const LANES: usize = 8;
+/// Points handled together by [`clearances_of`].
+const LANES: usize = 16;
 
-/// [`Sweep::least_h`] for `K` sweeps of one check in one pass over the points: the least `h`
-/// against each sweep, and against the standing robot's ellipse (the first sweep's
-/// [`Sweep::here`]; every sweep of one check has the same). Skipped points count as `f64::MAX`,
-/// selected rather than branched over, so the loop vectorises (in AVX2 where `level` allows).
-pub fn least_h_of<T: Lane, const K: usize>(sweeps: &[Sweep; K], pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>, level: SimdLevel) -> ([f64; K], f64) {
+/// Where [`clearances_of`] takes its points from and which it keeps.
+#[derive(Debug, Clone, Copy)]
+pub struct PointSet<'a, T> {
+    /// Rows of `stride` (2 or 3) coordinates, in the scan's frame.
+    pub pts: &'a [T],
+    /// Coordinates per point.
+    pub stride: usize,
+    /// Moves the points into the current body frame first.
+    pub motion: Option<Motion>,
+    /// Points farther than this (m, after the motion) are ignored: the shield's crop and the
+    /// sweeps' reach.
+    pub reach: f64,
+    /// For 3-D points: only `z_lo ≤ z ≤ z_hi` count.
+    pub band: Option<(f64, f64)>,
+}
+
+/// The least half-plane clearance of the points of `set` to each of `K` convex sets, and to
+/// the standing footprint `here` (`f64::MAX` without points), in one pass in lanes of `T`;
+/// the points within the reach, moved, are appended to `near` (rows of 2) when given. Blocks
+/// of points all beyond the reach are skipped. Runs the AVX-512 or AVX2 build where `level`
+/// and the CPU allow.
+pub fn clearances_of<T: Lane, const K: usize>(sets: [&Planes; K], here: &Planes, set: PointSet<'_, T>, near: Option<&mut Vec<T>>, level: SimdLevel) -> ([f64; K], f64) {
     #[cfg(target_arch = "x86_64")]
-    if level != SimdLevel::Portable && SimdLevel::Avx2.is_supported() {
-        // SAFETY: the CPU reports AVX2 and FMA, which this build enables.
-        return unsafe { least_h_avx2(sweeps, pts, stride, motion, crop, band) };
+    {
+        if level == SimdLevel::Avx512 && SimdLevel::Avx512.is_supported() {
+            // SAFETY: the CPU reports AVX-512 F/VL/DQ, AVX2 and FMA.
+            return unsafe { clearances_avx512(sets, here, set, near) };
+        }
+        if level != SimdLevel::Portable && SimdLevel::Avx2.is_supported() {
+            // SAFETY: the CPU reports AVX2 and FMA.
+            return unsafe { clearances_avx2(sets, here, set, near) };
+        }
     }
     let _ = level;
-    least_h_body(sweeps, pts, stride, motion, crop, band)
+    clearances_body(sets, here, set, near)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn least_h_avx2<T: Lane, const K: usize>(sweeps: &[Sweep; K], pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>) -> ([f64; K], f64) {
-    least_h_body(sweeps, pts, stride, motion, crop, band)
+fn clearances_avx2<T: Lane, const K: usize>(sets: [&Planes; K], here: &Planes, set: PointSet<'_, T>, near: Option<&mut Vec<T>>) -> ([f64; K], f64) {
+    clearances_body(sets, here, set, near)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx2,fma")]
+fn clearances_avx512<T: Lane, const K: usize>(sets: [&Planes; K], here: &Planes, set: PointSet<'_, T>, near: Option<&mut Vec<T>>) -> ([f64; K], f64) {
+    clearances_body(sets, here, set, near)
+}
+
+/// Half-planes in `T`.
+struct LanePlanes<T> {
+    len: usize,
+    nx: [T; MAX_PLANES],
+    ny: [T; MAX_PLANES],
+    off: [T; MAX_PLANES],
+}
+
+impl<T: Lane> LanePlanes<T> {
+    fn of(p: &Planes) -> Self {
+        Self { len: p.len, nx: p.nx.map(T::from_f64), ny: p.ny.map(T::from_f64), off: p.off.map(T::from_f64) }
+    }
+
+    /// The least over the lanes kept in `ok` of the largest `nᵀq − off`, folded into `acc`.
+    #[inline(always)]
+    fn fold(&self, xs: &[T; LANES], ys: &[T; LANES], ok: &[bool; LANES], acc: &mut [T; LANES]) {
+        let mut m = [-T::INF; LANES];
+        for k in 0..self.len {
+            let (nx, ny, off) = (self.nx[k], self.ny[k], self.off[k]);
+            for l in 0..LANES {
+                let v = nx * xs[l] + ny * ys[l] - off;
+                m[l] = if v > m[l] { v } else { m[l] };
+            }
+        }
+        for l in 0..LANES {
+            let v = if ok[l] { m[l] } else { T::INF };
+            acc[l] = if v < acc[l] { v } else { acc[l] };
+        }
+    }
 }
 
 #[inline(always)]
-fn least_h_body<T: Lane, const K: usize>(sweeps: &[Sweep; K], pts: &[T], stride: usize, motion: Option<Motion>, crop: f64, band: Option<(f64, f64)>) -> ([f64; K], f64) {
-    // per sweep: heading (cos, sin), 1/a², 1/b², the chord and 1 / (chordᵀ A chord)
-    let coeffs: [[f64; 7]; K] = std::array::from_fn(|k| {
-        let sw = &sweeps[k];
-        let (s, c) = sw.heading.sin_cos();
-        let (ia, ib) = (1.0 / (sw.semi_axes[0] * sw.semi_axes[0]), 1.0 / (sw.semi_axes[1] * sw.semi_axes[1]));
-        let (sx, sy) = (sw.chord[0], sw.chord[1]);
-        let qs = sx * sx * ia + sy * sy * ib;
-        [c, s, ia, ib, sx, sy, if qs > 0.0 { 1.0 / qs } else { 0.0 }]
-    });
-    let m = motion.unwrap_or(Motion { cos: 1.0, sin: 0.0, tx: 0.0, ty: 0.0 });
-    let crop2 = crop * crop;
-    let (z_lo, z_hi) = band.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-    let here_axes = sweeps.first().map_or([1.0; 2], |s| s.here);
-    let (ha, hb) = (1.0 / (here_axes[0] * here_axes[0]), 1.0 / (here_axes[1] * here_axes[1]));
-    let value = |p: &[T]| -> ([f64; K], f64) {
-        let (x, y) = m.apply(p[0], p[1]);
-        let (x, y) = (x.to_f64(), y.to_f64());
-        let z = if stride == 3 { p[2].to_f64() } else { 0.0 };
-        let skip = x * x + y * y > crop2 || z < z_lo || z > z_hi;
-        let least = std::array::from_fn(|k| {
-            let [c, s, ia, ib, sx, sy, inv_qs] = coeffs[k];
-            let (qx, qy) = (c * x + s * y, -s * x + c * y);
-            let t = ((qx * sx * ia + qy * sy * ib) * inv_qs).clamp(0.0, 1.0);
-            let (dx, dy) = (qx - t * sx, qy - t * sy);
-            let h = dx * dx * ia + dy * dy * ib - 1.0;
-            if skip {
-                f64::MAX
-            } else {
-                h
-            }
-        });
-        let here = x * x * ha + y * y * hb - 1.0;
-        (least, if skip { f64::MAX } else { here })
-    };
-    let mut least = [[f64::MAX; LANES]; K];
-    let mut here = [f64::MAX; LANES];
-    let mut blocks = pts.chunks_exact(stride * LANES);
-    for block in &mut blocks {
-        for lane in 0..LANES {
-            let (l, h) = value(&block[lane * stride..(lane + 1) * stride]);
-            for k in 0..K {
-                least[k][lane] = least[k][lane].min(l[k]);
-            }
-            here[lane] = here[lane].min(h);
+fn clearances_body<T: Lane, const K: usize>(sets: [&Planes; K], here: &Planes, set: PointSet<'_, T>, mut near: Option<&mut Vec<T>>) -> ([f64; K], f64) {
+    let lanes: [LanePlanes<T>; K] = sets.map(LanePlanes::of);
+    let here_lanes = LanePlanes::of(here);
+    let m = set.motion.unwrap_or(Motion { cos: 1.0, sin: 0.0, tx: 0.0, ty: 0.0 });
+    let reach2 = T::from_f64(if set.reach.is_finite() { set.reach * set.reach } else { f64::INFINITY });
+    let (z_lo, z_hi) = set.band.filter(|_| set.stride == 3).map_or((-T::INF, T::INF), |(a, b)| (T::from_f64(a), T::from_f64(b)));
+    let mut least = [[T::INF; LANES]; K];
+    let mut here_least = [T::INF; LANES];
+    let stride = set.stride;
+    let mut block = |rows: &[T]| {
+        let (mut xs, mut ys, mut ok) = ([T::ZERO; LANES], [T::ZERO; LANES], [false; LANES]);
+        for (l, p) in rows.chunks_exact(stride).enumerate() {
+            let (x, y) = m.apply(p[0], p[1]);
+            let z = if stride == 3 { p[2] } else { T::ZERO };
+            xs[l] = x;
+            ys[l] = y;
+            ok[l] = (x * x + y * y <= reach2) & (z >= z_lo) & (z <= z_hi);
         }
-    }
-    for p in blocks.remainder().chunks_exact(stride) {
-        let (l, h) = value(p);
+        if !ok.iter().any(|&b| b) {
+            return;
+        }
         for k in 0..K {
-            least[k][0] = least[k][0].min(l[k]);
+            lanes[k].fold(&xs, &ys, &ok, &mut least[k]);
         }
-        here[0] = here[0].min(h);
+        here_lanes.fold(&xs, &ys, &ok, &mut here_least);
+        if let Some(out) = near.as_deref_mut() {
+            for l in 0..LANES {
+                if ok[l] {
+                    out.push(xs[l]);
+                    out.push(ys[l]);
+                }
+            }
+        }
+    };
+    let mut blocks = set.pts.chunks_exact(stride * LANES);
+    for b in &mut blocks {
+        block(b);
     }
-    let fold = |v: &[f64; LANES]| v.iter().copied().fold(f64::MAX, f64::min);
-    (std::array::from_fn(|k| fold(&least[k])), fold(&here))
+    let rest = blocks.remainder();
+    if !rest.is_empty() {
+        block(rest);
+    }
+    let fold = |v: &[T; LANES]| {
+        let m = v.iter().map(|x| x.to_f64()).fold(f64::INFINITY, f64::min);
+        if m.is_finite() {
+            m
+        } else {
+            f64::MAX
+        }
+    };
+    (std::array::from_fn(|k| fold(&least[k])), fold(&here_least))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn rect() -> Footprint {
+        Footprint::rectangle(1.1, 0.5).unwrap()
+    }
+
+    /// The plain scalar transcription of the check: each point's clearance to the swept set,
+    /// the least over the points within the reach.
+    fn scalar(sw: &Sweep, fp: &Footprint, pts: &[[f64; 2]], reach: f64) -> (f64, f64) {
+        let (mut c, mut here) = (f64::MAX, f64::MAX);
+        for &p in pts.iter().filter(|p| p[0].hypot(p[1]) <= reach) {
+            c = c.min(sw.planes.clearance(p));
+            here = here.min(fp.clearance(p));
+        }
+        (c, here)
+    }
+
     #[test]
-    fn grown_ellipse_holds_the_disc_sum_in_every_direction() {
-        for (a, b) in [(0.9, 0.45), (0.45, 0.9), (1.0, 0.1), (0.5, 0.5), (2.0, 0.3)] {
-            for rho in [1e-4, 0.01, 0.15, 1.0, 5.0] {
-                let [ga, gb] = grow(a, b, rho);
-                for k in 0..3600 {
-                    let th = k as f64 * std::f64::consts::TAU / 3600.0;
-                    let (s, c) = th.sin_cos();
-                    let sum = (a * a * c * c + b * b * s * s).sqrt() + rho;
-                    let big = (ga * ga * c * c + gb * gb * s * s).sqrt();
-                    assert!(big >= sum - 1e-12, "({a}, {b}) + {rho}: {big} < {sum} at {th}");
+    fn the_lane_kernel_equals_the_scalar_check_on_random_inputs() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let model = BrakingModel::default();
+        let fp = model.footprint;
+        let here = Planes::of_footprint(&fp);
+        for case in 0..300 {
+            let v0 = [rng.random_range(-1.6..1.6), rng.random_range(-0.8..0.8), rng.random_range(-1.5..1.5)];
+            let cmd = [rng.random_range(-1.6..1.6), rng.random_range(-0.8..0.8), rng.random_range(-1.5..1.5)];
+            let sw = model.sweep(v0, cmd);
+            let n = rng.random_range(0..200);
+            let pts: Vec<[f64; 2]> = (0..n).map(|_| [rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0)]).collect();
+            let flat: Vec<f64> = pts.iter().flatten().copied().collect();
+            let reach = rng.random_range(0.5..4.0);
+            let want = scalar(&sw, &fp, &pts, reach);
+            for level in [SimdLevel::Portable, SimdLevel::detect()] {
+                let mut near = Vec::new();
+                let set = PointSet { pts: &flat[..], stride: 2, motion: None, reach, band: None };
+                let ([c], h) = clearances_of([&sw.planes], &here, set, Some(&mut near), level);
+                assert!((c - want.0).abs() < 1e-12 && (h - want.1).abs() < 1e-12, "case {case} {level:?}: {c} {h} vs {want:?}");
+                assert_eq!(near.len() / 2, pts.iter().filter(|p| p[0].hypot(p[1]) <= reach).count());
+                let f32s: Vec<f32> = flat.iter().map(|&v| v as f32).collect();
+                let set = PointSet { pts: &f32s[..], stride: 2, motion: None, reach, band: None };
+                let ([c32], h32) = clearances_of([&sw.planes], &here, set, None, level);
+                if want.0 < f64::MAX {
+                    assert!((c32 - want.0).abs() < 1e-5 && (h32 - want.1).abs() < 1e-5, "f32 case {case}: {c32} vs {want:?}");
                 }
             }
         }
@@ -295,9 +520,8 @@ mod tests {
 
     #[test]
     fn a_straight_brake_from_full_speed_ends_where_the_tracker_stops() {
-        let model = BrakingModel { brake_margin: 0.0, ..BrakingModel::default() };
-        let sw = model.sweep([1.6, 0.0, 0.0], [1.6, 0.0, 0.0], [0.9, 0.45]);
-        // replay the tracker itself: one period of the command, then the brake
+        let model = BrakingModel::default();
+        let sw = model.sweep([1.6, 0.0, 0.0], [1.6, 0.0, 0.0]);
         let mut t = crate::robot::Tracker::new(model.tracker).unwrap();
         t.set_velocity([1.6, 0.0, 0.0]);
         let mut x = 0.0;
@@ -309,37 +533,59 @@ mod tests {
         assert!(sw.chord[0] <= x && sw.chord[0] >= x - 2.0 * TAIL, "{} vs {x}", sw.chord[0]);
         assert!(sw.chord[1].abs() < 1e-12 && sw.heading == 0.0);
         assert!(sw.growth <= TAIL + 1e-12, "a straight brake grows only by the tail: {}", sw.growth);
-        // a wall point just past the stopping ellipse's nose passes, one inside fails
-        let nose = x + 0.9;
-        assert!(sw.least_h(&[nose + 0.01, 0.0], 2, None, f64::INFINITY, None).0 > 0.0);
-        assert!(sw.least_h(&[nose - 0.01, 0.0], 2, None, f64::INFINITY, None).0 < 0.0);
+        // a wall point just past the stopping footprint's nose clears it, one inside does not
+        let nose = x + 0.55;
+        assert!(sw.clearance([nose + 0.01, 0.2]) > 0.0);
+        assert!(sw.clearance([nose - 0.01, 0.2]) < 0.0);
+        // beside the body, the sweep is as wide as the body
+        assert!((sw.clearance([0.3, 0.35]) - 0.1).abs() < 1e-3);
     }
 
     #[test]
-    fn turning_grows_the_ellipse_and_the_path_stays_inside() {
+    fn turning_the_path_stays_inside_the_grown_sweep() {
         let model = BrakingModel::default();
-        let (a, b) = (0.9, 0.45);
-        let sw = model.sweep([1.2, 0.3, 1.5], [1.6, 0.8, 1.5], [a, b]);
-        assert!(sw.growth > 0.05, "{sw:?}");
-        // every ellipse point of every replayed pose lies inside the swept, grown ellipse
-        let mut t = crate::robot::Tracker::new(model.tracker).unwrap();
-        t.set_velocity([1.2, 0.3, 1.5]);
-        let (mut x, mut y, mut th) = (0.0f64, 0.0f64, 0.0f64);
-        let mut cmd = [1.6, 0.8, 1.5];
-        for _ in 0..400 {
-            let v = t.step(cmd, model.dt).unwrap().velocity;
-            cmd = [0.0; 3];
-            let (s, c) = th.sin_cos();
-            x += model.dt * (c * v[0] - s * v[1]);
-            y += model.dt * (s * v[0] + c * v[1]);
-            th += model.dt * v[2];
-            let (s, c) = th.sin_cos();
-            for k in 0..72 {
-                let e = k as f64 * std::f64::consts::TAU / 72.0;
-                let (ex, ey) = (0.999 * a * e.cos(), 0.999 * b * e.sin());
-                let p = [x + c * ex - s * ey, y + s * ex + c * ey];
-                assert!(sw.least_h(&p, 2, None, f64::INFINITY, None).0 < 0.0, "pose ({x}, {y}, {th}) leaves the sweep at {p:?}");
+        let fp = model.footprint;
+        for (v0, cmd) in [([1.2, 0.3, 1.5], [1.6, 0.8, 1.5]), ([0.3, 0.0, -1.0], [0.5, -0.3, -1.5]), ([0.0; 3], [0.0, 0.0, 1.5])] {
+            let sw = model.sweep(v0, cmd);
+            let mut t = crate::robot::Tracker::new(model.tracker).unwrap();
+            t.set_velocity(v0);
+            let (mut x, mut y, mut th) = (0.0f64, 0.0f64, 0.0f64);
+            let mut c = cmd;
+            for _ in 0..400 {
+                let v = t.step(c, model.dt).unwrap().velocity;
+                c = [0.0; 3];
+                let (s, co) = th.sin_cos();
+                x += model.dt * (co * v[0] - s * v[1]);
+                y += model.dt * (s * v[0] + co * v[1]);
+                th += model.dt * v[2];
+                let (s, co) = th.sin_cos();
+                // every boundary point of the footprint at every replayed pose lies in the set
+                let vs = fp.vertices();
+                for k in 0..vs.len() {
+                    for f in 0..10 {
+                        let f = f as f64 / 10.0;
+                        let (a, b) = (vs[k], vs[(k + 1) % vs.len()]);
+                        let e = [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
+                        let p = [x + co * e[0] - s * e[1], y + s * e[0] + co * e[1]];
+                        assert!(sw.clearance(p) <= 1e-9, "{v0:?} {cmd:?}: pose ({x}, {y}, {th}) leaves the sweep at {p:?}");
+                        assert!(p[0].hypot(p[1]) <= sw.extent + 1e-9);
+                    }
+                }
             }
         }
+    }
+
+    #[test]
+    fn footprints_are_checked_and_either_winding_is_taken() {
+        let ccw = Footprint::polygon(&[[0.5, 0.3], [-0.5, 0.3], [-0.5, -0.3], [0.5, -0.3]]).unwrap();
+        let cw = Footprint::polygon(&[[0.5, -0.3], [-0.5, -0.3], [-0.5, 0.3], [0.5, 0.3]]).unwrap();
+        assert!((ccw.clearance([1.0, 0.0]) - 0.5).abs() < 1e-12 && (cw.clearance([1.0, 0.0]) - 0.5).abs() < 1e-12);
+        assert!((rect().clearance([0.0, 0.0]) + 0.25).abs() < 1e-12);
+        let err = |v: &[[f64; 2]]| Footprint::polygon(v).unwrap_err().to_string();
+        assert!(err(&[[1.0, 0.0], [0.0, 1.0]]).contains("footprint"));
+        assert!(err(&[[1.0, 1.0], [2.0, 1.0], [2.0, 2.0]]).contains("origin"));
+        assert!(err(&[[1.0, 1.0], [-1.0, 1.0], [0.0, 0.5], [-1.0, -1.0], [1.0, -1.0]]).contains("convex"));
+        assert!(err(&[[f64::NAN, 1.0], [-1.0, 1.0], [0.0, -1.0]]).contains("finite"));
+        assert!(Footprint::rectangle(-1.0, 0.5).unwrap_err().to_string().contains("footprint"));
     }
 }

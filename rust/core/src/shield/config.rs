@@ -82,6 +82,10 @@ pub struct ShieldConfig {
     /// translation first, as the paper's filter does, and the turn only where the box leaves
     /// no other way.
     pub rotation_weight: f64,
+    /// Speed (m/s) up to which the braking shield follows the nominal command where the
+    /// ellipse row would stop the robot but the footprint's braking check lets it pass
+    /// (aisles and doorways narrower than the ellipse). 0 keeps the row's command only.
+    pub tight_speed: f64,
 }
 
 impl Default for ShieldConfig {
@@ -98,6 +102,7 @@ impl Default for ShieldConfig {
             grad_eps: 1e-9,
             braking: BrakingModel::default(),
             rotation_weight: 4.0,
+            tight_speed: 0.5,
         }
     }
 }

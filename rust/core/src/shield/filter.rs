@@ -7,7 +7,7 @@ use super::composite::{check_gamma_kappa, composite_of_valid, CompositeBarrier, 
 use super::config::{finite, positive, ShieldConfig, ShieldMethod};
 use super::conic::{solve_rows, LinearConstraints};
 use super::ellipsoid::Envelope;
-use super::input::{check_finite, BodyState, Points, Scan};
+use super::input::{check_finite, BodyState, Points, Scan, MAX_BODY_RATE};
 use super::lane::Lane;
 use super::qp::{self, QpSolution, MAX_VARS};
 use super::scan::{select_points, ScanScratch};
@@ -41,16 +41,24 @@ pub struct ShieldOutcome {
     /// The rotation command: filtered by the braking shield, the given `ω` otherwise
     /// (body frame; `[0, 0, ω]` planar).
     pub omega: Vec3,
-    /// The braking check refused the row's command and every fraction of it the shield
-    /// tries (½, ¼, ⅛): it sends the brake (`0`).
+    /// The braking check found no safe fraction of the row's command nor of the tight-space
+    /// command: the shield sends the brake (`0`).
     pub braked: bool,
-    /// The ellipse already holds a point (`min h_i < 0`): the braking shield sends the
-    /// command that raises `H` fastest within the box (the least-violating solution when
-    /// the row cannot be met), never a stop, and skips the check.
+    /// The ellipse already holds a point (`min h_i < 0`): the row's command is the one that
+    /// raises `H` fastest within the box (the least-violating solution when the row cannot be
+    /// met); the braking check still decides how much of it is sent.
     pub recovering: bool,
-    /// The braking check's value for the row's command: the least `h` against the ellipse
-    /// swept until the robot stands (≥ 0 passes); NaN when no check ran.
+    /// The braking check's margin for the row's full command (m): the least clearance of the
+    /// footprint swept until the robot stands, less the clearance required (≥ 0 passes); NaN
+    /// when no check ran.
     pub sweep_h: f64,
+    /// The braking shield sent (a safe fraction of) the tight-space command, the nominal
+    /// command at most `tight_speed`, because the row's command made less progress: the
+    /// ellipse does not fit where the body does.
+    pub tight: bool,
+    /// The least clearance (m) of the standing footprint to the points the check used
+    /// (`f64::MAX` when none is within reach); NaN when no check ran.
+    pub clearance: f64,
 }
 
 /// The safety shield: configuration, scratch buffers and the SIMD level of its kernel.
@@ -64,6 +72,9 @@ pub struct Shield {
     pub(super) buf64: Vec<f64>,
     /// The braking check's replayed path, reused from call to call.
     pub(super) brake_path: Vec<[f64; 2]>,
+    /// The braking check's points within reach, moved (rows of 2), reused from call to call.
+    pub(super) near32: Vec<f32>,
+    pub(super) near64: Vec<f64>,
     pub(super) moved32: Vec<f32>,
     pub(super) moved64: Vec<f64>,
     pub(super) body: Vec<f64>,
@@ -83,6 +94,8 @@ pub(super) struct Filtered {
     pub(super) braked: bool,
     pub(super) recovering: bool,
     pub(super) sweep_h: f64,
+    pub(super) tight: bool,
+    pub(super) clearance: f64,
 }
 
 /// A body-frame vector `g` in the world frame (`R g`), its z dropped for a planar shield.
@@ -114,6 +127,9 @@ impl Shield {
         }
         config.scan.validate()?;
         config.braking.validate()?;
+        if !(config.tight_speed.is_finite() && (0.0..=MAX_BODY_RATE).contains(&config.tight_speed)) {
+            return Err(Error::invalid("tight_speed", format!("must be from 0 to {MAX_BODY_RATE} m/s, got {}", config.tight_speed)));
+        }
         if !(config.rotation_weight.is_finite() && (1e-3..=1e3).contains(&config.rotation_weight)) {
             return Err(Error::invalid("rotation_weight", format!("must be from 1e-3 to 1e3, got {}", config.rotation_weight)));
         }
@@ -126,6 +142,8 @@ impl Shield {
             buf32: Vec::new(),
             buf64: Vec::new(),
             brake_path: Vec::new(),
+            near32: Vec::new(),
+            near64: Vec::new(),
             moved32: Vec::new(),
             moved64: Vec::new(),
             body: Vec::new(),
@@ -184,7 +202,7 @@ impl Shield {
             ShieldMethod::HardMin => self.hard_min_row(scan, state, u_nom, extra)?,
             ShieldMethod::Distance => self.distance_row(scan, state, u_nom, extra)?,
         };
-        let Filtered { value, h_min, grad_p, dh_dt, num_points, sol, omega: omega_out, braked, recovering, sweep_h } = f;
+        let Filtered { value, h_min, grad_p, dh_dt, num_points, sol, omega: omega_out, braked, recovering, sweep_h, tight, clearance } = f;
         if !sol.u.iter().chain(&omega_out).all(|v| v.is_finite()) {
             // (never seen within the parameters' bounds; a NaN command must not reach a robot)
             return Err(Error::Solver(format!("the filtered command is not finite: {:?}", &sol.u[..dim])));
@@ -204,6 +222,8 @@ impl Shield {
             braked,
             recovering,
             sweep_h,
+            tight,
+            clearance,
         })
     }
 
@@ -389,7 +409,20 @@ impl Shield {
         } else {
             self.solve_row(u_nom, &g, -alpha * b.value - b.dh_dt, u_max.as_deref(), extra)?
         };
-        Ok(Filtered { value: b.value, h_min: b.h_min, grad_p: g, dh_dt: b.dh_dt, num_points: b.num_points, sol, omega: state.omega, braked: false, recovering: false, sweep_h: f64::NAN })
+        Ok(Filtered {
+            value: b.value,
+            h_min: b.h_min,
+            grad_p: g,
+            dh_dt: b.dh_dt,
+            num_points: b.num_points,
+            sol,
+            omega: state.omega,
+            braked: false,
+            recovering: false,
+            sweep_h: f64::NAN,
+            tight: false,
+            clearance: f64::NAN,
+        })
     }
 }
 

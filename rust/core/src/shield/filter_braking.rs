@@ -1,27 +1,159 @@
-//! The braking shield's filter: the composite row over velocity and rotation, checked against
-//! the body's braking (see `docs/braking.md`).
+//! The braking shield's filter: the composite row over velocity and rotation shapes the
+//! command, the braking check of the footprint decides how much of it is sent (see
+//! `docs/braking.md`).
 
-use super::braking::{self, Sweep};
+use super::braking::{clearances_of, BrakingModel, Planes, PointSet, Sweep, TOLERANCE};
+use super::composite::CompositeBarrier;
 use super::conic::LinearConstraints;
 use super::filter::Shield;
 use super::filter::{to_world, Filtered};
 use super::input::{BodyState, Points, Scan};
+use super::lane::Lane;
 use super::qp::{QpSolution, MAX_VARS};
 use crate::error::{Error, Result};
+use crate::simd::SimdLevel;
 
-/// The fractions of the row's command the braking shield tries, in turn, before it brakes:
-/// near a wall the full command may fail the check while a slower one of the same direction
-/// passes (a robot standing by a wall would otherwise brake for ever).
-const BRAKING_SCALES: [f64; 4] = [1.0, 0.5, 0.25, 0.125];
+/// Beyond the farthest reach of the candidates' sweeps (m), points are left out of the
+/// search's later passes; a sweep reaching past it fails.
+const REACH_SLACK: f64 = 0.2;
+/// How much nearer than it is (m) a point already within the clearance may appear to a
+/// candidate that does not approach it: the rounding of the half-plane offsets.
+const ROUNDING: f64 = 1e-9;
+/// Rounds of the search for the largest safe fraction of a candidate, each one pass over the
+/// points within reach with [`SEARCH_SCALES`] fractions: the bracket shrinks to `5⁻³`.
+const SEARCH_ROUNDS: usize = 3;
+const SEARCH_SCALES: usize = 4;
+/// The row's command is *stalled* when its progress along the nominal command is below this
+/// share of the tight-space command's speed: the tight-space candidate is then weighed too.
+const STALL: f64 = 0.5;
+
+/// What the check decided.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Decision {
+    /// The command sent (world-frame translation and `ω`), `None` to brake.
+    pub command: Option<[f64; 3]>,
+    /// The tight-space candidate (the nominal command at most `tight_speed`) was chosen.
+    pub tight: bool,
+    /// The least clearance of the standing footprint (m).
+    pub clearance: f64,
+    /// The row's full command's swept clearance less the clearance required (m).
+    pub sweep_margin: f64,
+}
+
+/// The candidates of one call: the row's command and the tight-space command, body frame.
+struct Candidates {
+    row: [f64; 3],
+    tight: [f64; 3],
+    /// The nominal translation's unit direction (zero for a nominal at rest).
+    direction: [f64; 2],
+    /// Progress (m/s along `direction`) below which the row's command counts as stalled.
+    stall: f64,
+    /// The standing footprint's points lie farther than every sweep's reach.
+    all_far: bool,
+    /// The body's measured velocity.
+    v0: [f64; 3],
+    /// The row's and the tight-space command in the world frame (translation, `ω`): what is
+    /// sent, scaled, so the box holds exactly.
+    row_world: [f64; 3],
+    tight_world: [f64; 3],
+}
+
+fn progress(c: &Candidates, cmd: &[f64; 3], scale: f64) -> f64 {
+    scale * (cmd[0] * c.direction[0] + cmd[1] * c.direction[1])
+}
+
+/// The check on the points of `set`: the row's command, else the largest safe fraction of it
+/// or of the tight-space command, whichever makes more progress, else the brake.
+fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_, T>, near: &mut Vec<T>, c: &Candidates, path: &mut Vec<[f64; 2]>, extra: Option<&LinearConstraints>) -> Decision {
+    let here = Planes::of_footprint(&model.footprint);
+    let keep = model.clearance();
+    let row = model.sweep_with(c.v0, c.row, path);
+    let tight = model.sweep_with(c.v0, c.tight, path);
+    let brake = model.sweep_with(c.v0, [0.0; 3], path);
+    let reach = row.extent.max(tight.extent).max(brake.extent) + keep + REACH_SLACK;
+    near.clear();
+    let ([row_raw], clearance) = if c.all_far {
+        ([f64::MAX], f64::MAX)
+    } else {
+        set.reach = set.reach.min(reach);
+        clearances_of([&row.planes], &here, set, Some(near), level)
+    };
+    // the clearance each candidate must keep: the margin; with a point already nearer, no
+    // point may come nearer than it is (the swept polygon's exact half-plane clearance, which
+    // holds the approach of the translation and the turn to the middle heading), and the
+    // growth beyond it (the path's bends, the turn either side, the lag's tail) stays within
+    // TOLERANCE: the least clearance never shrinks, so it cannot be ratcheted down
+    let within = clearance < keep;
+    let required = if within { clearance } else { keep };
+    let passes = |sw: &Sweep, raw: f64| sw.extent + keep <= reach && if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE } else { raw - sw.growth >= keep };
+    let sweep_margin = row_raw.min(f64::MAX / 2.0) - row.growth - required;
+    let near_set = PointSet { pts: &near[..], stride: 2, motion: None, reach: f64::INFINITY, band: None };
+    let largest = |cmd: &[f64; 3], full_passes: bool, path: &mut Vec<[f64; 2]>| -> Option<f64> {
+        if full_passes {
+            return Some(1.0);
+        }
+        let (mut lo, mut hi, mut found) = (0.0, 1.0, None);
+        for _ in 0..SEARCH_ROUNDS {
+            let scales: [f64; SEARCH_SCALES] = std::array::from_fn(|k| lo + (hi - lo) * (k + 1) as f64 / (SEARCH_SCALES + 1) as f64);
+            let sweeps: [Sweep; SEARCH_SCALES] = std::array::from_fn(|k| model.sweep_with(c.v0, cmd.map(|v| v * scales[k]), path));
+            let (raw, _): ([f64; SEARCH_SCALES], f64) = clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, near_set, None, level);
+            match (0..SEARCH_SCALES).rev().find(|&k| passes(&sweeps[k], raw[k])) {
+                Some(k) => {
+                    (lo, found) = (scales[k], Some(scales[k]));
+                    if k + 1 < SEARCH_SCALES {
+                        hi = scales[k + 1];
+                    }
+                }
+                None => hi = scales[0],
+            }
+        }
+        found
+    };
+    let mut row_scale = largest(&c.row, passes(&row, row_raw), path);
+    let (mut row_cmd, mut row_world) = (c.row, c.row_world);
+    if within && row_scale != Some(1.0) && c.row[2] != 0.0 {
+        // a turn grows the sweep: within the clearance, the row's translation alone may
+        // carry the footprint farther away
+        let straight = [c.row[0], c.row[1], 0.0];
+        let sw = model.sweep_with(c.v0, straight, path);
+        let ([raw], _) = clearances_of([&sw.planes], &here, near_set, None, level);
+        let s = largest(&straight, passes(&sw, raw), path);
+        let speed = |s: Option<f64>| s.map_or(-1.0, |s| s * c.row[0].hypot(c.row[1]));
+        if speed(s) > speed(row_scale) {
+            (row_scale, row_cmd, row_world) = (s, straight, [c.row_world[0], c.row_world[1], 0.0]);
+        }
+    }
+    let row_progress = row_scale.map_or(f64::NEG_INFINITY, |s| progress(c, &row_cmd, s));
+    let mut chosen = row_scale.map(|s| (row_world.map(|v| v * s), false));
+    // within the clearance the row's command (which raises H: away from the points) goes
+    // first; the tight-space command is weighed where the row stalls in free space, or
+    // where the row has no safe fraction at all
+    if row_progress < c.stall && (!within || row_scale.is_none()) {
+        let ([tight_raw], _) = if c.all_far { ([f64::MAX], 0.0) } else { clearances_of([&tight.planes], &here, near_set, None, level) };
+        if let Some(s) = largest(&c.tight, passes(&tight, tight_raw), path) {
+            let tight_world = c.tight_world.map(|v| v * s);
+            // the user's rows hold for the tight-space command as sent (a fraction of a
+            // command that meets `aᵀu ≥ b` with b > 0 may not)
+            let meets = |k: usize| {
+                let (a, b) = extra.map_or((&[][..], 0.0), |e| e.row(k));
+                a.iter().zip(&tight_world).map(|(a, u)| a * u).sum::<f64>() >= b - 1e-9 * (1.0 + b.abs())
+            };
+            if progress(c, &c.tight, s) > row_progress.max(0.0) + 1e-9 && (0..extra.map_or(0, |e| e.len())).all(meets) {
+                chosen = Some((tight_world, true));
+            }
+        }
+    }
+    Decision { command: chosen.map(|(cmd, _)| cmd), tight: chosen.is_some_and(|(_, t)| t), clearance, sweep_margin }
+}
 
 impl Shield {
-    /// The braking shield: the composite row over velocity and rotation, then the braking check
-    /// of the command, its fractions, or the brake (see `docs/braking.md`).
+    /// The braking shield: the composite row over velocity and rotation, then the braking
+    /// check of the footprint: the row's command, the largest safe fraction of it or of the
+    /// tight-space command, or the brake (see `docs/braking.md`).
     pub(super) fn braking_row(&mut self, scan: &Scan, state: &BodyState, u_nom: &[f64], extra: Option<&LinearConstraints>) -> Result<Filtered> {
         let (dim, r) = (self.dim(), state.rotation);
         let alpha = self.config.alpha;
         let u_max = self.config.u_max.clone();
-        let (mut braked, mut sweep_h) = (false, f64::NAN);
         let still = BodyState { omega: [0.0; 3], ..*state };
         let b = self.barrier(scan, &still)?;
         let g = to_world(&r, dim, &b.grad_body);
@@ -51,37 +183,27 @@ impl Shield {
             sol.u[k] /= w;
         }
         let recovering = b.h_min < 0.0;
-        if dim == 2 && !recovering && b.num_points > 0 {
+        let mut decision = Decision { command: Some([sol.u[0], sol.u[1], sol.u[2]]), tight: false, clearance: f64::MAX, sweep_margin: f64::NAN };
+        if dim == 2 && b.num_points > 0 {
             let v0 = *state.velocity.as_ref().ok_or_else(|| Error::invalid("velocity", "the braking shield needs the body's measured velocity (v_x, v_y, ω), body frame"))?;
-            let cmd = crate::math::mat_t_vec(&r, &[sol.u[0], sol.u[1], 0.0]);
-            let semi = self.envelope.semi_axes();
-            // the row's command, else the largest of its fractions that passes, else the
-            // brake: the command's check in one pass over the points, its fractions'
-            // together in a second
-            let passes = |h: f64, here: f64| h >= 0.0 || h >= here - braking::WORSE;
-            let model = self.config.braking;
-            let mut path = std::mem::take(&mut self.brake_path);
-            let w_cmd = sol.u[2];
-            let mut sweep = |scale: f64| model.sweep_with(v0, [scale * cmd[0], scale * cmd[1], scale * w_cmd], [semi[0], semi[1]], &mut path);
-            let ([h], here) = self.sweep_least_h(scan, &[sweep(1.0)]);
-            sweep_h = h;
-            let mut passed = passes(h, here).then_some(1.0);
-            if passed.is_none() {
-                let fractions = [sweep(BRAKING_SCALES[1]), sweep(BRAKING_SCALES[2]), sweep(BRAKING_SCALES[3])];
-                let (hs, here) = self.sweep_least_h(scan, &fractions);
-                passed = (0..3).find(|&k| passes(hs[k], here)).map(|k| BRAKING_SCALES[k + 1]);
-            }
-            self.brake_path = path;
-            match passed {
-                Some(1.0) => {}
-                Some(scale) => {
-                    sol.u.iter_mut().for_each(|v| *v *= scale);
-                    sol.active = true;
+            // the tight-space command: the nominal one in the box and the user's rows
+            let nominal = match extra {
+                None => None,
+                Some(e) => {
+                    let mut t = self.solve_row_n(&x_nom[..n], &row[..n], f64::NEG_INFINITY, &lim[..n], Some(e))?;
+                    t.u[dim] /= w;
+                    Some(t.u)
                 }
-                None => {
-                    braked = true;
-                    sol = QpSolution { u: [0.0; MAX_VARS], active: true, feasible: sol.feasible };
+            };
+            let c = self.candidates(&b, state, u_nom, &sol, v0, nominal);
+            decision = self.check(scan, &c, extra);
+            match decision.command {
+                Some(cmd) => {
+                    let changed = (0..3).any(|k| cmd[k] != sol.u[k]);
+                    sol.u[..3].copy_from_slice(&cmd);
+                    sol.active |= changed;
                 }
+                None => sol = QpSolution { u: [0.0; MAX_VARS], active: true, feasible: sol.feasible },
             }
         }
         let mut u = [0.0; MAX_VARS];
@@ -93,23 +215,82 @@ impl Shield {
             omega_out.copy_from_slice(&sol.u[3..6]);
         }
         let dh_dt = (0..3).map(|k| b.grad_omega[k] * omega_out[k]).sum();
-        Ok(Filtered { value: b.value, h_min: b.h_min, grad_p: g, dh_dt, num_points: b.num_points, sol: QpSolution { u, ..sol }, omega: omega_out, braked, recovering, sweep_h })
+        Ok(Filtered {
+            value: b.value,
+            h_min: b.h_min,
+            grad_p: g,
+            dh_dt,
+            num_points: b.num_points,
+            sol: QpSolution { u, ..sol },
+            omega: omega_out,
+            braked: decision.command.is_none(),
+            recovering,
+            sweep_h: decision.sweep_margin,
+            tight: decision.tight,
+            clearance: decision.clearance,
+        })
     }
 
-    /// The braking check's least `h` over the points the composite used.
-    fn sweep_least_h<const K: usize>(&self, scan: &Scan, sweeps: &[Sweep; K]) -> ([f64; K], f64) {
-        if self.config.scan.downsamples() {
+    /// The row's command and the tight-space command in the body frame, and what the
+    /// composite pass already tells of the points' distance.
+    fn candidates(&self, b: &CompositeBarrier, state: &BodyState, u_nom: &[f64], sol: &QpSolution, v0: [f64; 3], nominal: Option<[f64; MAX_VARS]>) -> Candidates {
+        let r = &state.rotation;
+        let row_t = crate::math::mat_t_vec(r, &[sol.u[0], sol.u[1], 0.0]);
+        let t = &self.config.braking.tracker;
+        // the nominal command in the QP's box (world frame), the turn in the tracker's
+        let lim = self.config.u_max.as_deref().unwrap_or(&t.v_max);
+        let nom_w = match nominal {
+            Some(u) => [u[0], u[1], u[2]],
+            None => [u_nom[0].clamp(-lim[0], lim[0]), u_nom[1].clamp(-lim[1], lim[1]), state.omega[2].clamp(-t.w_max, t.w_max)],
+        };
+        let nom_b = crate::math::mat_t_vec(r, &[nom_w[0], nom_w[1], 0.0]);
+        let nom = [nom_b[0], nom_b[1], nom_w[2]];
+        let speed = nom[0].hypot(nom[1]);
+        let cap = if speed > self.config.tight_speed { self.config.tight_speed / speed } else { 1.0 };
+        let direction = if speed > 1e-9 { [nom[0] / speed, nom[1] / speed] } else { [0.0; 2] };
+        // every point lies outside the ellipse scaled by √(1 + h_min), which holds the disc
+        // of radius b_min √(1 + h_min): farther than any sweep reaches (a generous bound)
+        let semi = self.envelope.semi_axes();
+        let shortest = semi[0].min(semi[1]);
+        let model = &self.config.braking;
+        let bound = 2.0 * (v0[0].hypot(v0[1]) + t.v_max[0].hypot(t.v_max[1])) * ((v0[0].hypot(v0[1]) + t.v_max[0].hypot(t.v_max[1])) / t.a_max[0].min(t.a_max[1]) + 10.0 * t.tau + 2.0 * model.dt)
+            + 3.0 * model.footprint.radius()
+            + model.clearance()
+            + REACH_SLACK;
+        let all_far = b.h_min >= 0.0 && shortest * (1.0 + b.h_min.min(1e12)).sqrt() > bound;
+        Candidates {
+            v0,
+            row: [row_t[0], row_t[1], sol.u[2]],
+            tight: nom.map(|v| v * cap),
+            row_world: [sol.u[0], sol.u[1], sol.u[2]],
+            tight_world: nom_w.map(|v| v * cap),
+            direction,
+            stall: STALL * self.config.tight_speed.min(speed),
+            all_far,
+        }
+    }
+
+    /// The check over the points the composite used.
+    fn check(&mut self, scan: &Scan, c: &Candidates, extra: Option<&LinearConstraints>) -> Decision {
+        let model = self.config.braking;
+        let mut path = std::mem::take(&mut self.brake_path);
+        let level = self.level;
+        let out = if self.config.scan.downsamples() {
             // the down-sampled points (already moved, cropped and banded), as the barrier took them
-            return match scan.points {
-                Points::F32(_) => braking::least_h_of(sweeps, &self.buf32, self.dim(), None, f64::INFINITY, None, self.level),
-                Points::F64(_) => braking::least_h_of(sweeps, &self.buf64, self.dim(), None, f64::INFINITY, None, self.level),
-            };
-        }
-        let crop = self.config.scan.crop_radius.unwrap_or(f64::INFINITY);
-        let band = if scan.stride == 3 { self.config.scan.height_band } else { None };
-        match scan.points {
-            Points::F32(p) => braking::least_h_of(sweeps, p, scan.stride, scan.motion, crop, band, self.level),
-            Points::F64(p) => braking::least_h_of(sweeps, p, scan.stride, scan.motion, crop, band, self.level),
-        }
+            let dim = self.dim();
+            match scan.points {
+                Points::F32(_) => decide(&model, level, PointSet { pts: &self.buf32, stride: dim, motion: None, reach: f64::INFINITY, band: None }, &mut self.near32, c, &mut path, extra),
+                Points::F64(_) => decide(&model, level, PointSet { pts: &self.buf64, stride: dim, motion: None, reach: f64::INFINITY, band: None }, &mut self.near64, c, &mut path, extra),
+            }
+        } else {
+            let reach = self.config.scan.crop_radius.unwrap_or(f64::INFINITY);
+            let band = if scan.stride == 3 { self.config.scan.height_band } else { None };
+            match scan.points {
+                Points::F32(p) => decide(&model, level, PointSet { pts: p, stride: scan.stride, motion: scan.motion, reach, band }, &mut self.near32, c, &mut path, extra),
+                Points::F64(p) => decide(&model, level, PointSet { pts: p, stride: scan.stride, motion: scan.motion, reach, band }, &mut self.near64, c, &mut path, extra),
+            }
+        };
+        self.brake_path = path;
+        out
     }
 }

@@ -35,7 +35,7 @@ mod lane;
 mod qp;
 mod scan;
 
-pub use braking::{BrakingModel, Sweep};
+pub use braking::{clearances_of, BrakingModel, Footprint, Planes, PointSet, Sweep, MAX_FOOTPRINT_VERTICES};
 pub use composite::{composite_reference, evaluate_composite, evaluate_composite_moved, CompositeBarrier, CompositeParams, Motion, SimdLevel, MAX_GAMMA, MAX_KAPPA, MIN_GAMMA, MIN_KAPPA};
 pub use config::{ShieldConfig, ShieldMethod, ROTATION_TOLERANCE};
 pub use conic::{solve_rows, LinearConstraints};

@@ -1,0 +1,64 @@
+"""The red team's tight-space sites (agents.tight): every one starts the robot contact-free,
+with the clearance it names, in an aisle or doorway of the width it names."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import shieldnav  # noqa: F401
+
+from agents import redteam
+from agents.tight import HALF_LENGTH, HALF_WIDTH, scenario_file, tight_sites
+
+SITES = tight_sites(seed=0)
+
+
+def test_the_families_and_widths_are_all_there():
+    names = [s["site"] for s in SITES]
+    assert len(names) == len(set(names)) == 27
+    assert [s["width"] for s in SITES if s["site"].startswith("aisle-")] == [0.60, 0.65, 0.70, 0.75, 0.80, 0.85, 0.90]
+    assert min(s["width"] for s in SITES if s["site"].startswith("L-")) == 0.65
+    assert {s["site"] for s in SITES if s["site"].startswith(("beside", "facing", "corner"))} == {
+        "beside-0.05", "beside-0.10", "facing-0.10", "facing-0.20", "corner-0.15", "corner-0.20"}
+    assert all(0.02 <= s["gap"] <= 0.26 for s in SITES), [(s["site"], s["gap"]) for s in SITES]
+    # the jitter follows the seed, the names and geometry stay
+    other = tight_sites(seed=1)
+    assert [s["site"] for s in other] == names and other[0]["scenario"]["start"] != SITES[0]["scenario"]["start"]
+    # the red team's --tight runs exactly these, reported apart
+    assert [s["site"] for s in redteam.sites(None) if s["worlds"] == "tight"] == names
+
+
+def free_width(points: np.ndarray, x0: float, x1: float) -> float:
+    """The free width across x in [x0, x1]: the nearest return on the left plus the right."""
+    near = points[(points[:, 0] > x0) & (points[:, 0] < x1)]
+    return float(near[near[:, 1] > 0, 1].min() - near[near[:, 1] < 0, 1].max())
+
+
+@pytest.mark.parametrize("site", SITES, ids=[s["site"] for s in SITES])
+def test_tight_start_is_contact_free_and_as_named(site, tmp_path):
+    start = site["scenario"]["start"]
+    env = gym.make(redteam.TIGHT_ID, scenario_path=scenario_file(site["scenario"], tmp_path), observation="dict", lidar_noise_std=0.0)
+    for seed in (0, 1):
+        obs, info = env.reset(seed=seed)
+        assert info["site"] == site["site"]
+        # the scan in the start's frame, aligned with the site (its walls along x and y)
+        c, s = np.cos(start["yaw"]), np.sin(start["yaw"])
+        p = obs["points"][obs["valid"] == 1][:, :2].astype(float) @ np.array([[c, s], [-s, c]])
+        name = site["site"]
+        if name.startswith(("aisle", "L-")):
+            assert free_width(p, -0.4, 0.4) == pytest.approx(site["width"], abs=0.01)
+        elif name.startswith("door"):
+            jamb = -start["x"]  # the doorway's wall spans x = 0 .. 0.15 in the site
+            assert free_width(p, jamb + 0.01, jamb + 0.14) == pytest.approx(site["width"], abs=0.01)
+        else:
+            if name.startswith(("beside", "corner")):  # the wall y = 0, on the right
+                side = p[(np.abs(p[:, 0]) < HALF_LENGTH) & (p[:, 1] < 0)]
+                assert -side[:, 1].max() - HALF_WIDTH == pytest.approx(site["gap"], abs=0.01)
+            if name.startswith(("facing", "corner")):  # the wall x = 5, ahead
+                ahead = p[(np.abs(p[:, 1]) < HALF_WIDTH) & (p[:, 0] > 0)]
+                assert ahead[:, 0].min() - HALF_LENGTH == pytest.approx(site["gap"], abs=0.01)
+        _, _, _, _, info = env.step(np.zeros(3, np.float32))
+        assert info["cost"] == 0 and not info["collision"]
+        assert info["clearance"] == pytest.approx(site["gap"], abs=0.01)
+    env.close()
