@@ -1,6 +1,6 @@
 //! Latency distribution of single `Shield::filter` calls (points in, u* out), timed one by
 //! one: median, p99.6 and max, per method (the paper's composite and the braking shield,
-//! whose robot moves at 1 m/s), per N, planar and 3D, f32 scans, best SIMD level.
+//! whose robot moves at 1 m/s), per N, planar and 3D, f32 scans in beam order, best SIMD level.
 //!
 //! `cargo bench -p shieldnav-core --bench shield_latency`
 
@@ -30,7 +30,11 @@ fn main() {
             for &n in &SIZES {
                 let axes = if dim == 2 { vec![0.9, 0.45] } else { vec![0.9, 0.45, 0.3] };
                 let mut s = Shield::new(ShieldConfig { semi_axes: axes, u_max: Some(vec![1.0; dim]), method, ..ShieldConfig::default() }).unwrap().with_simd_level(level).unwrap();
-                let pts: Vec<f32> = corridor_scan(n, dim, 7).iter().map(|&v| v as f32).collect();
+                // in beam order, as a LIDAR delivers them (the braking check skips blocks of
+                // neighbouring beams beyond its sweeps)
+                let mut rows: Vec<Vec<f64>> = corridor_scan(n, dim, 7).chunks(dim).map(|r| r.to_vec()).collect();
+                rows.sort_by(|a, b| a[1].atan2(a[0]).total_cmp(&b[1].atan2(b[0])));
+                let pts: Vec<f32> = rows.iter().flatten().map(|&v| v as f32).collect();
                 let scan = Scan::new_f32(&pts, dim).unwrap();
                 let st = if dim == 2 {
                     BodyState::planar(0.3, 0.2).unwrap().with_velocity([1.0, 0.0, 0.2]).unwrap()

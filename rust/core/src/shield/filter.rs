@@ -389,7 +389,8 @@ impl Shield {
                 return Err(Error::invalid("extra_A", "method \"none\" applies no constraints; pick a filtering method"));
             }
         }
-        if self.config.method != ShieldMethod::Composite && self.config.method != ShieldMethod::Unfiltered {
+        // (the composite kernel, which the braking shield runs first, rejects NaN and inf itself)
+        if !matches!(self.config.method, ShieldMethod::Composite | ShieldMethod::Unfiltered | ShieldMethod::Braking) {
             check_finite(scan)?;
         }
         Ok(())

@@ -20,9 +20,9 @@ const REACH_SLACK: f64 = 0.2;
 /// candidate that does not approach it: the rounding of the half-plane offsets.
 const ROUNDING: f64 = 1e-9;
 /// Rounds of the search for the largest safe fraction of a candidate, each one pass over the
-/// points within reach with [`SEARCH_SCALES`] fractions: the bracket shrinks to `5⁻³`.
+/// points within reach with [`SEARCH_SCALES`] fractions: the bracket shrinks to `4⁻³`.
 const SEARCH_ROUNDS: usize = 3;
-const SEARCH_SCALES: usize = 4;
+const SEARCH_SCALES: usize = 3;
 /// The row's command is *stalled* when its progress along the nominal command is below this
 /// share of the tight-space command's speed: the tight-space candidate is then weighed too.
 const STALL: f64 = 0.5;
@@ -69,14 +69,14 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
     let keep = model.clearance();
     let row = model.sweep_with(c.v0, c.row, path);
     let tight = model.sweep_with(c.v0, c.tight, path);
-    let brake = model.sweep_with(c.v0, [0.0; 3], path);
-    let reach = row.extent.max(tight.extent).max(brake.extent) + keep + REACH_SLACK;
+    // (a fraction's sweep reaching farther than this fails: the points beyond are not kept)
+    let reach = row.extent.max(tight.extent) + keep + REACH_SLACK;
     near.clear();
     let ([row_raw], clearance) = if c.all_far {
         ([f64::MAX], f64::MAX)
     } else {
         set.reach = set.reach.min(reach);
-        clearances_of([&row.planes], &here, set, Some(near), level)
+        clearances_of([&row.planes], &here, set, Some(near), keep, level)
     };
     // the clearance each candidate must keep: the margin; with a point already nearer, no
     // point may come nearer than it is (the swept polygon's exact half-plane clearance, which
@@ -96,7 +96,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         for _ in 0..SEARCH_ROUNDS {
             let scales: [f64; SEARCH_SCALES] = std::array::from_fn(|k| lo + (hi - lo) * (k + 1) as f64 / (SEARCH_SCALES + 1) as f64);
             let sweeps: [Sweep; SEARCH_SCALES] = std::array::from_fn(|k| model.sweep_with(c.v0, cmd.map(|v| v * scales[k]), path));
-            let (raw, _): ([f64; SEARCH_SCALES], f64) = clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, near_set, None, level);
+            let (raw, _): ([f64; SEARCH_SCALES], f64) = clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, near_set, None, keep, level);
             match (0..SEARCH_SCALES).rev().find(|&k| passes(&sweeps[k], raw[k])) {
                 Some(k) => {
                     (lo, found) = (scales[k], Some(scales[k]));
@@ -116,7 +116,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         // carry the footprint farther away
         let straight = [c.row[0], c.row[1], 0.0];
         let sw = model.sweep_with(c.v0, straight, path);
-        let ([raw], _) = clearances_of([&sw.planes], &here, near_set, None, level);
+        let ([raw], _) = clearances_of([&sw.planes], &here, near_set, None, keep, level);
         let s = largest(&straight, passes(&sw, raw), path);
         let speed = |s: Option<f64>| s.map_or(-1.0, |s| s * c.row[0].hypot(c.row[1]));
         if speed(s) > speed(row_scale) {
@@ -129,7 +129,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
     // first; the tight-space command is weighed where the row stalls in free space, or
     // where the row has no safe fraction at all
     if row_progress < c.stall && (!within || row_scale.is_none()) {
-        let ([tight_raw], _) = if c.all_far { ([f64::MAX], 0.0) } else { clearances_of([&tight.planes], &here, near_set, None, level) };
+        let ([tight_raw], _) = if c.all_far { ([f64::MAX], 0.0) } else { clearances_of([&tight.planes], &here, near_set, None, keep, level) };
         if let Some(s) = largest(&c.tight, passes(&tight, tight_raw), path) {
             let tight_world = c.tight_world.map(|v| v * s);
             // the user's rows hold for the tight-space command as sent (a fraction of a
