@@ -28,6 +28,7 @@ reactive shield cannot stop something from driving into a robot that already sta
     python -m agents.redteam --train-attacker --timesteps 300000 --out results/redteam
     python -m agents.redteam --attackers ppo --attacker-model results/redteam/attacker.zip
     python -m agents.redteam --backend ray [--ray-address auto]
+    python -m agents.redteam --quick --set lidar_noise_std=0.05 --set brake_margin=0.02   # env keywords in every cell
 
 Results: a table on stdout, ``redteam.json`` and ``redteam.csv`` under ``--out``.
 """
@@ -35,6 +36,7 @@ Results: a table on stdout, ``redteam.json`` and ``redteam.csv`` under ``--out``
 from __future__ import annotations
 
 import argparse
+import ast
 import csv
 import json
 import math
@@ -47,6 +49,7 @@ from typing import Any, Iterator
 import gymnasium as gym
 import numpy as np
 import shieldnav  # noqa: F401  (registers the ids)
+from shieldnav.exceptions import InvalidArgumentError
 from tqdm import tqdm
 
 from agents.benchmark import check_options, output_folder, positive_int
@@ -65,6 +68,20 @@ QUICK_TIGHT = ("aisle-0.70", "door-0.80-inside")
 WORLDS = ("static", "tight", "moving")
 #: Control periods per second at the default dt.
 RATE = 50
+#: Keywords each cell sets itself (the site, the shield, the episode's length): not for --set.
+OWN_KEYWORDS = ("shield", "time_limit", "terminate_at_goal", "threads", "preset", "procedural", "map_path", "scenario_path", "default_site", "observation")
+
+
+def keyword(text: str) -> tuple[str, Any]:
+    """argparse type of ``--set KEY=VALUE``: the value a Python literal where it parses as one
+    (``0.05``, ``(1.1, 0.5)``, ``True``), else the string."""
+    key, eq, value = text.partition("=")
+    if not eq or not key.strip():
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    try:
+        return key.strip(), ast.literal_eval(value)
+    except (ValueError, SyntaxError):
+        return key.strip(), value
 
 
 def sites(maps: Path | None, seed: int = 0) -> list[dict[str, Any]]:
@@ -151,11 +168,13 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
             ended = final["shieldnav_episode"]
             for i in np.flatnonzero(ended["_contact_steps"]):
                 episodes.append({k: float(ended[k][i]) for k in ("contact_steps", "collisions", "min_clearance", "steps", "shield_braked_steps", "shield_recovering_steps")})
+    settings = {k: env.config[k] for k in task.get("set", {})}  # as the environment took them
     env.close()
     episodes = episodes[: task["episodes"]]
     contact = [e["contact_steps"] for e in episodes]
     return {
         **{k: task[k] for k in ("site", "env_id", "shield", "attacker", "worlds", "dynamic")},
+        "set": settings,
         "episodes": len(episodes),
         "steps": int(sum(e["steps"] for e in episodes)),
         "contact_steps": int(sum(contact)),
@@ -198,9 +217,10 @@ def run_ray(todo: list[dict[str, Any]], address: str | None, workers: int) -> It
             ray.cancel(p)
 
 
-def train_attacker(env_id: str, shield: str, timesteps: int, seed: int, out: Path, num_envs: int) -> Path:
+def train_attacker(env_id: str, shield: str, timesteps: int, seed: int, out: Path, num_envs: int, **settings: Any) -> Path:
     """PPO trained under ``shield`` with a reward for contact (+10 a step) and for low
-    clearance (``−clearance``, capped at 1 m): the strongest learned attacker we build."""
+    clearance (``−clearance``, capped at 1 m): the strongest learned attacker we build;
+    ``settings`` go to the environment."""
     from shieldnav.sb3 import ShieldnavVecEnv
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecEnvWrapper
@@ -214,7 +234,7 @@ def train_attacker(env_id: str, shield: str, timesteps: int, seed: int, out: Pat
             reward = np.array([10.0 * i["cost"] - min(i["clearance"], 1.0) for i in infos], dtype=np.float32)
             return obs, reward, done, infos
 
-    inner = ShieldnavVecEnv(env_id, num_envs=num_envs, shield=shield, terminate_at_goal=False, time_limit=750)
+    inner = ShieldnavVecEnv(env_id, num_envs=num_envs, shield=shield, terminate_at_goal=False, time_limit=750, **settings)
     inner.seed(seed)
     venv = AttackReward(inner)
     model = PPO("MlpPolicy", venv, seed=seed, n_steps=256, batch_size=512, device="cpu", verbose=0)
@@ -256,12 +276,22 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--attacker-model", default=None, help="the ppo attacker's model (.zip)")
     ap.add_argument("--train-attacker", action="store_true", help="train the ppo attacker, then stop")
     ap.add_argument("--timesteps", type=positive_int, default=300_000, help="--train-attacker's training steps")
+    ap.add_argument("--set", type=keyword, action="append", default=[], metavar="KEY=VALUE",
+                    help="an environment keyword for every cell (repeatable), e.g. --set lidar_noise_std=0.05")
     ap.add_argument("--out", default="results/redteam")
     args = ap.parse_args(argv)
     check_options(ap, args, "shields", "attackers")
+    settings = dict(args.set)
+    own = sorted(set(settings) & set(OWN_KEYWORDS))
+    if own:
+        ap.error(f"argument --set: {', '.join(own)} is set by the red team itself (use --shields, --steps)")
+    try:  # one environment with them, before any cell runs
+        gym.make(STATIC[0], **settings).close()
+    except InvalidArgumentError as err:
+        ap.error(f"argument --set: {err}")
     out = output_folder(ap, args.out)
     if args.train_attacker:
-        path = train_attacker("shieldnav/CorridorInspection-v0", args.shields[0], args.timesteps, args.seed, out, 8)
+        path = train_attacker("shieldnav/CorridorInspection-v0", args.shields[0], args.timesteps, args.seed, out, 8, **settings)
         print(f"attacker saved to {path}")
         return []
     if "ppo" in args.attackers and not args.attacker_model:
@@ -278,7 +308,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     per_cell["moving"] = per_cell["static"]
     todo = [
         {**s, "shield": shield, "attacker": attacker, "episodes": per_cell[s["worlds"]], "steps": args.steps, "seed": args.seed + 1000 * k,
-         "num_envs": args.num_envs, "threads": args.workers, "model": args.attacker_model}
+         "num_envs": args.num_envs, "threads": args.workers, "model": args.attacker_model, "kwargs": {**s["kwargs"], **settings}, "set": settings}
         for shield in args.shields for k, attacker in enumerate(args.attackers) for s in todo_sites
     ]
     source = run_local(todo) if args.backend == "local" else run_ray(todo, args.ray_address, args.workers)
@@ -294,7 +324,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
             w = csv.DictWriter(f, fieldnames=list(results[0]))
             w.writeheader()
             w.writerows(results)
-        print(table(results))
+        print(table(results) + (f"\nenvironment keywords (--set): {settings}" if settings else ""))
     return results
 
 

@@ -1,7 +1,10 @@
 """The red team's tight-space sites (agents.tight): every one starts the robot contact-free,
-with the clearance it names, in an aisle or doorway of the width it names."""
+with the clearance it names, in an aisle or doorway of the width it names. ``--set`` passes
+environment keywords to every cell, checked before any runs."""
 
 from __future__ import annotations
+
+import json
 
 import gymnasium as gym
 import numpy as np
@@ -62,3 +65,20 @@ def test_tight_start_is_contact_free_and_as_named(site, tmp_path):
         assert info["cost"] == 0 and not info["collision"]
         assert info["clearance"] == pytest.approx(site["gap"], abs=0.01)
     env.close()
+
+
+def test_red_team_set_reaches_every_cell(tmp_path):
+    results = redteam.main(["--quick", "--shields", "braking", "--attackers", "held", "--episodes", "1", "--num-envs", "1",
+                            "--steps", "10", "--workers", "1", "--set", "lidar_noise_std=0.03", "--out", str(tmp_path)])
+    assert results and all(r["set"] == {"lidar_noise_std": 0.03} for r in results)
+    assert all(r["set"] == {"lidar_noise_std": 0.03} for r in json.loads((tmp_path / "redteam.json").read_text()))
+
+
+@pytest.mark.parametrize("setting, name", [("nonsense=1", "nonsense"), ("lidar_noise_std=fast", "lidar_noise_std"), ("shield=none", "shield")])
+def test_red_team_refuses_a_bad_set_before_any_cell(setting, name, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        redteam.main(["--quick", "--set", setting, "--out", str(tmp_path / "out")])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert f"`{name}`" in err or f"--set: {name}" in err, err
+    assert not (tmp_path / "out").exists()
