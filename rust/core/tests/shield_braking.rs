@@ -126,3 +126,20 @@ fn a_start_within_the_margin_escapes_without_coming_nearer() {
         }
     }
 }
+
+#[test]
+fn within_the_margin_at_a_corner_the_body_does_not_move_toward_either_edge() {
+    // a point 0.01 m off the rear-right corner, within the 0.04 m clearance: which edge it lies
+    // against is only known up to the range noise, so neither backward nor rightward passes
+    use shieldnav_core::shield::{BodyState, Scan, Shield};
+    let mut sh = Shield::new(ShieldConfig { method: ShieldMethod::Braking, ..ShieldConfig::default() }).unwrap();
+    let pts = [-0.545, -0.26];
+    let st = BodyState::planar(0.0, 0.0).unwrap().with_velocity([0.0; 3]).unwrap();
+    for u in [[-1.0, 0.0], [0.0, -0.8], [-1.0, -0.8], [-1.0, 0.8]] {
+        let out = sh.filter(&Scan::new_f64(&pts, 2).unwrap(), &st, &u).unwrap();
+        assert!(out.u[0] >= -1e-12 && out.u[1] >= -1e-12, "{u:?} moved toward the corner point: {:?}", out.u);
+    }
+    // away from it passes
+    let out = sh.filter(&Scan::new_f64(&pts, 2).unwrap(), &st, &[1.0, 0.8]).unwrap();
+    assert!(out.u[0] > 0.0 && out.u[1] > 0.0, "{:?}", out.u);
+}

@@ -50,6 +50,8 @@ struct Candidates {
     stall: f64,
     /// The standing footprint's points lie farther than every sweep's reach.
     all_far: bool,
+    /// Body to world.
+    rotation: crate::math::Mat3,
     /// The body's measured velocity.
     v0: [f64; 3],
     /// The row's and the tight-space command in the world frame (translation, `ω`): what is
@@ -85,7 +87,16 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
     // TOLERANCE: the least clearance never shrinks, so it cannot be ratcheted down
     let within = clearance < keep;
     let required = if within { clearance } else { keep };
-    let passes = |sw: &Sweep, raw: f64| sw.extent + keep <= reach && if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE } else { raw - sw.growth >= keep };
+    // within the clearance, which side of the footprint a point lies on is only known up to the
+    // range noise: near a corner the noise moves a point from one edge's side to the other's.
+    // So every edge a point within the clearance may lie against (its half-plane value within
+    // `keep` of the point's clearance) is held: no candidate's chord may move toward it
+    let held = if within { held_edges(&model.footprint, near, keep) } else { 0 };
+    let toward_held = |sw: &Sweep| {
+        let (s, c) = sw.heading.sin_cos();
+        model.footprint.edges().enumerate().any(|(j, (n, _))| held >> j & 1 == 1 && (c * n[0] - s * n[1]) * sw.chord[0] + (s * n[0] + c * n[1]) * sw.chord[1] > ROUNDING)
+    };
+    let passes = |sw: &Sweep, raw: f64| sw.extent + keep <= reach && if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE && !toward_held(sw) } else { raw - sw.growth >= keep };
     let sweep_margin = row_raw.min(f64::MAX / 2.0) - row.growth - required;
     let near_set = PointSet { pts: &near[..], stride: 2, motion: None, reach: f64::INFINITY, band: None };
     let largest = |cmd: &[f64; 3], full_passes: bool, path: &mut Vec<[f64; 2]>| -> Option<f64> {
@@ -111,16 +122,25 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
     };
     let mut row_scale = largest(&c.row, passes(&row, row_raw), path);
     let (mut row_cmd, mut row_world) = (c.row, c.row_world);
-    if within && row_scale != Some(1.0) && c.row[2] != 0.0 {
-        // a turn grows the sweep: within the clearance, the row's translation alone may
-        // carry the footprint farther away
-        let straight = [c.row[0], c.row[1], 0.0];
+    if within && row_scale != Some(1.0) {
+        // within the clearance a turn grows the sweep and a held edge forbids its side: the
+        // row's translation alone, less its components toward the held edges, may still
+        // carry the footprint away
+        let mut t = [c.row[0], c.row[1]];
+        for (j, (n, _)) in model.footprint.edges().enumerate() {
+            let toward = n[0] * t[0] + n[1] * t[1];
+            if held >> j & 1 == 1 && toward > 0.0 {
+                t = [t[0] - toward * n[0], t[1] - toward * n[1]];
+            }
+        }
+        let straight = [t[0], t[1], 0.0];
+        let world = crate::math::mat_vec(&c.rotation, &straight);
         let sw = model.sweep_with(c.v0, straight, path);
         let ([raw], _) = clearances_of([&sw.planes], &here, near_set, None, keep, level);
         let s = largest(&straight, passes(&sw, raw), path);
-        let speed = |s: Option<f64>| s.map_or(-1.0, |s| s * c.row[0].hypot(c.row[1]));
-        if speed(s) > speed(row_scale) {
-            (row_scale, row_cmd, row_world) = (s, straight, [c.row_world[0], c.row_world[1], 0.0]);
+        let speed = |s: Option<f64>, t: &[f64; 3]| s.map_or(-1.0, |s| s * t[0].hypot(t[1]));
+        if speed(s, &straight) > speed(row_scale, &c.row) {
+            (row_scale, row_cmd, row_world) = (s, straight, [world[0], world[1], 0.0]);
         }
     }
     let row_progress = row_scale.map_or(f64::NEG_INFINITY, |s| progress(c, &row_cmd, s));
@@ -144,6 +164,24 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         }
     }
     Decision { command: chosen.map(|(cmd, _)| cmd), tight: chosen.is_some_and(|(_, t)| t), clearance, sweep_margin }
+}
+
+/// The footprint's edges (bit `j` for edge `j`) that a point within `keep` of the footprint
+/// may lie against: those whose half-plane value for it is within `keep` of its clearance.
+fn held_edges<T: Lane>(fp: &super::braking::Footprint, near: &[T], keep: f64) -> u32 {
+    let mut held = 0u32;
+    for p in near.chunks_exact(2) {
+        let q = [p[0].to_f64(), p[1].to_f64()];
+        let c = fp.clearance(q);
+        if c < keep {
+            for (j, (n, off)) in fp.edges().enumerate() {
+                if n[0] * q[0] + n[1] * q[1] - off >= c - keep {
+                    held |= 1 << j;
+                }
+            }
+        }
+    }
+    held
 }
 
 impl Shield {
@@ -267,6 +305,7 @@ impl Shield {
             direction,
             stall: STALL * self.config.tight_speed.min(speed),
             all_far,
+            rotation: state.rotation,
         }
     }
 
