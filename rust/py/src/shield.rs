@@ -198,7 +198,7 @@ impl PyShield {
     /// `extra_A @ u >= extra_b` adds rows, solved with the barrier's by Clarabel. For
     /// method "braking", `omega` is the nominal rotation command it filters and `velocity`
     /// the body's measured (vx, vy, omega), body frame. Returns a `ShieldOutcome` (u, omega,
-    /// H, h_min, grad_p, dH_dt, num_points, active, feasible, braked, recovering, sweep_h,
+    /// H, h_min, grad_p, dH_dt, num_points, active, feasible, braked, recovering, sweep_h, tight, clearance,
     /// solve_time_ns); bad input raises `InvalidArgumentError` naming the argument.
     #[pyo3(signature = (points, u_nom, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None, velocity = None))]
     #[allow(non_snake_case, clippy::too_many_arguments)]

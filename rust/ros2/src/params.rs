@@ -123,7 +123,7 @@ pub struct NodeParams {
     pub node_name: String,
     /// The shield, validated by [`Shield::new`].
     pub shield: ShieldConfig,
-    /// Send zero when the constraints cannot be met (recovery excepted).
+    /// Send zero when the constraints cannot be met (the planar braking shield excepted).
     pub stop_when_infeasible: bool,
     /// Topics (remaps applied); `None` when switched off.
     pub topics: Topics,
