@@ -34,39 +34,13 @@ impl Shield {
         match nearest {
             None => {
                 let sol = self.solve_row(u_nom, &[0.0; 3], f64::NEG_INFINITY, u_max.as_deref(), extra)?;
-                Ok(Filtered {
-                    value: f64::MAX,
-                    h_min: f64::MAX,
-                    grad_p: [0.0; 3],
-                    dh_dt: 0.0,
-                    num_points: 0,
-                    sol,
-                    omega: state.omega,
-                    braked: false,
-                    recovering: false,
-                    sweep_h: f64::NAN,
-                    tight: false,
-                    clearance: f64::NAN,
-                })
+                Ok(Filtered::unchecked(f64::MAX, f64::MAX, [0.0; 3], 0.0, 0, sol, state.omega))
             }
             Some((h, p)) => {
                 let g = to_world(&r, dim, &env.grad_body(&p));
                 let dt = env.dh_dt_body(&p, &state.omega);
                 let sol = self.solve_row(u_nom, &g, -alpha * h - dt, u_max.as_deref(), extra)?;
-                Ok(Filtered {
-                    value: h,
-                    h_min: h,
-                    grad_p: g,
-                    dh_dt: dt,
-                    num_points: n,
-                    sol,
-                    omega: state.omega,
-                    braked: false,
-                    recovering: false,
-                    sweep_h: f64::NAN,
-                    tight: false,
-                    clearance: f64::NAN,
-                })
+                Ok(Filtered::unchecked(h, h, g, dt, n, sol, state.omega))
             }
         }
     }
@@ -102,7 +76,7 @@ impl Shield {
         }
         // stop, as the composite does with a vanishing gradient (see `qp`)
         let sol = if stuck { QpSolution { u: [0.0; MAX_VARS], active: true, feasible: false } } else { solve_rows(u_nom, &self.rows, u_max.as_deref())? };
-        Ok(Filtered { value: h_min, h_min, grad_p: g_near, dh_dt: 0.0, num_points: n, sol, omega: state.omega, braked: false, recovering: false, sweep_h: f64::NAN, tight: false, clearance: f64::NAN })
+        Ok(Filtered::unchecked(h_min, h_min, g_near, 0.0, n, sol, state.omega))
     }
 }
 

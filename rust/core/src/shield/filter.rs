@@ -98,6 +98,13 @@ pub(super) struct Filtered {
     pub(super) clearance: f64,
 }
 
+impl Filtered {
+    /// A row without the braking check: the given rotation passes through.
+    pub(super) fn unchecked(value: f64, h_min: f64, grad_p: Vec3, dh_dt: f64, num_points: usize, sol: QpSolution, omega: Vec3) -> Self {
+        Self { value, h_min, grad_p, dh_dt, num_points, sol, omega, braked: false, recovering: false, sweep_h: f64::NAN, tight: false, clearance: f64::NAN }
+    }
+}
+
 /// A body-frame vector `g` in the world frame (`R g`), its z dropped for a planar shield.
 pub(super) fn to_world(r: &Mat3, dim: usize, g: &Vec3) -> Vec3 {
     let mut w = mat_vec(r, g);
@@ -410,20 +417,7 @@ impl Shield {
         } else {
             self.solve_row(u_nom, &g, -alpha * b.value - b.dh_dt, u_max.as_deref(), extra)?
         };
-        Ok(Filtered {
-            value: b.value,
-            h_min: b.h_min,
-            grad_p: g,
-            dh_dt: b.dh_dt,
-            num_points: b.num_points,
-            sol,
-            omega: state.omega,
-            braked: false,
-            recovering: false,
-            sweep_h: f64::NAN,
-            tight: false,
-            clearance: f64::NAN,
-        })
+        Ok(Filtered::unchecked(b.value, b.h_min, g, b.dh_dt, b.num_points, sol, state.omega))
     }
 }
 
