@@ -8,6 +8,7 @@ use crate::control::{NominalController, NominalControllerConfig};
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::planner::ViewPlannerConfig;
+use crate::sensors::{Mover, MoverTracker, MoverTrackerConfig};
 use crate::shield::{move_points, BodyState, BrakingModel, Footprint, Motion, Scan as PointScan, Shield, ShieldConfig, ShieldMethod, ShieldOutcome};
 use crate::sim::{World, WorldConfig};
 use crate::world::generate::{generate, GeneratorConfig};
@@ -78,6 +79,11 @@ pub struct EpisodeConfig {
     /// The footprint the braking shield keeps off the points: a convex polygon (body frame,
     /// m, Nav2's `footprint` convention); `None`: the robot's `length × width` rectangle.
     pub footprint: Option<Vec<[Real; 2]>>,
+    /// Track moving objects from the scans and the odometry ([`MoverTracker`]) and give them
+    /// to the shield. Off: every return is taken as static.
+    pub track_movers: bool,
+    /// The mover tracker's parameters.
+    pub movers: MoverTrackerConfig,
 }
 
 impl Default for EpisodeConfig {
@@ -100,6 +106,8 @@ impl Default for EpisodeConfig {
             stop_when_infeasible: true,
             time_limit: None,
             footprint: None,
+            track_movers: true,
+            movers: MoverTrackerConfig::default(),
         }
     }
 }
@@ -174,6 +182,8 @@ pub struct StepReport {
     pub solve_time_ns: u64,
     /// Points the shield used.
     pub num_points: usize,
+    /// Moving objects the shield was given.
+    pub movers: usize,
     /// A scan was taken this step.
     pub scanned: bool,
     /// Episode time (s).
@@ -189,6 +199,12 @@ pub struct EpisodeSummary {
     pub time: Real,
     /// Contact onsets (a contact after a contact-free step).
     pub collisions: u64,
+    /// Contact onsets at which the robot was moving: a point of its footprint faster than
+    /// [`MOVING_CONTACT_SPEED`] at the starts of the step and of the one before (the robot
+    /// drove into it; at rest, something else came).
+    pub moving_collisions: u64,
+    /// Steps at which the shield was given at least one moving object.
+    pub mover_steps: u64,
     /// Steps in contact.
     pub contact_steps: u64,
     /// Time in contact (s).
@@ -251,6 +267,8 @@ pub struct Episode {
     last_estimate: Pose2,
     estimate_change: Pose2,
     velocity: [Real; 3],
+    /// The body's velocity a step before `velocity`.
+    previous_velocity: [Real; 3],
     last_command: [Real; 3],
     last: StepReport,
     last_shield: Option<ShieldOutcome>,
@@ -259,7 +277,15 @@ pub struct Episode {
     solve_time_sum: Real,
     in_contact: bool,
     seed: u64,
+    tracker: MoverTracker,
+    /// The movers of the latest scan (its body frame) and as the shield takes them now.
+    movers_scan: Vec<Mover>,
+    movers_now: Vec<Mover>,
 }
+
+/// Speed (m/s) of the footprint's fastest point above which a contact onset counts as the
+/// robot's ([`EpisodeSummary::moving_collisions`]).
+pub const MOVING_CONTACT_SPEED: Real = 0.05;
 
 /// Mixes the reset seed into the world's RNG seed, distinct from the site generator's.
 fn world_seed(seed: u64) -> u64 {
@@ -305,6 +331,7 @@ impl Episode {
         let controller = NominalController::new(config.controller)?;
         crate::planner::ViewPlanner::new(config.planner)?;
         let deadlock = DeadlockMonitor::new(config.deadlock)?;
+        let tracker = MoverTracker::new(config.movers)?;
         let scenario = site.scenario(seed)?;
         let mut wc = config.world;
         wc.seed = world_seed(seed);
@@ -327,6 +354,7 @@ impl Episode {
             last_estimate: Pose2::default(),
             estimate_change: Pose2::default(),
             velocity: [0.0; 3],
+            previous_velocity: [0.0; 3],
             last_command: [0.0; 3],
             last: StepReport::default(),
             last_shield: None,
@@ -335,6 +363,9 @@ impl Episode {
             solve_time_sum: 0.0,
             in_contact: false,
             seed,
+            tracker,
+            movers_scan: Vec::new(),
+            movers_now: Vec::new(),
         };
         ep.start()?;
         Ok(ep)
@@ -365,13 +396,15 @@ impl Episode {
         self.last_estimate = self.world.estimated_pose();
         self.estimate_change = Pose2::default();
         self.velocity = [0.0; 3];
+        self.previous_velocity = [0.0; 3];
         self.last_command = [0.0; 3];
         self.summary = EpisodeSummary { min_clearance: Real::INFINITY, min_h: Real::INFINITY, deadlock_time: Real::NAN, ..Default::default() };
         self.intervention_sum = 0.0;
         self.solve_time_sum = 0.0;
         self.in_contact = false;
         self.last_shield = None;
-        self.index_scan();
+        self.tracker.reset();
+        self.index_scan()?;
         self.compensate_points();
         self.inspect();
         let p = self.world.true_pose();
@@ -399,7 +432,7 @@ impl Episode {
     /// After a scan: the range bins, and which returns the shield may need until the next one.
     /// A return at range `r` lies at least `r − |t|` from the robot after it moved by `t`, so
     /// returns beyond `crop + margin` stay outside the crop while `|t| ≤ margin`.
-    fn index_scan(&mut self) {
+    fn index_scan(&mut self) -> Result<()> {
         let scan = self.world.scan();
         let lidar = self.config.world.lidar;
         self.bins.resize(self.config.observation.bins, 1.0);
@@ -407,6 +440,14 @@ impl Episode {
         let t = &self.config.world.tracker;
         self.near_margin = t.v_max[0].hypot(t.v_max[1]) / lidar.rate_hz + 0.05;
         self.select_near();
+        self.movers_scan.clear();
+        if self.config.track_movers {
+            // the scan and the odometry's pose: nothing from the simulator's truth
+            let scan = self.world.scan();
+            let movers = self.tracker.update(&scan.points, self.world.estimated_pose(), scan.stamp)?;
+            self.movers_scan.extend_from_slice(movers);
+        }
+        Ok(())
     }
 
     fn select_near(&mut self) {
@@ -432,6 +473,9 @@ impl Episode {
             self.select_near();
         }
         self.motion = Motion::planar(rel.yaw, rel.x, rel.y);
+        let age = self.world.time() - self.world.scan().stamp;
+        self.movers_now.clear();
+        self.movers_now.extend(self.movers_scan.iter().map(|m| m.advanced(age).moved(rel.yaw, rel.x, rel.y)));
     }
 
     /// One control period: `action` (in `[-1, 1]³`, read by the action mode) → `u_nom` →
@@ -441,7 +485,13 @@ impl Episode {
         let u_nom = nominal_command(self.config.action_mode, &action, estimate, &self.config.world.tracker, &self.controller, self.config.waypoint_reach)?;
         let w_max = self.config.world.tracker.w_max;
         let omega = u_nom[2].clamp(-w_max, w_max);
-        let scan = PointScan::new_f32(&self.near, 3)?.moved(self.motion);
+        let scan = PointScan::new_f32(&self.near, 3)?.moved(self.motion).with_movers(&self.movers_now);
+        let movers = self.movers_now.len();
+        let r = self.config.shield.braking.footprint.radius();
+        // the robot's own motion: its speed over the two steps before (a push that is about to
+        // become a contact moves the body one step early)
+        let speed = |v: &[Real; 3]| v[0].hypot(v[1]) + r * v[2].abs();
+        let speed_before = speed(&self.velocity).min(speed(&self.previous_velocity));
         let state = BodyState::planar(0.0, omega)?.with_velocity(self.velocity)?;
         let out = self.shield.filter(&scan, &state, &u_nom[..2])?;
         let u = if self.config.shield.method == ShieldMethod::Braking {
@@ -456,7 +506,7 @@ impl Episode {
         let before = self.world.true_pose();
         let step = self.world.step(u)?;
         if step.scanned {
-            self.index_scan();
+            self.index_scan()?;
         }
         self.compensate_points();
         let new_coverage = if step.scanned { self.inspect() } else { 0.0 };
@@ -472,6 +522,7 @@ impl Episode {
         let reward = r.coverage * new_coverage - r.collision * cost - r.intervention * intervention;
         self.estimate_change = self.last_estimate.between(&step.estimated_pose);
         self.last_estimate = step.estimated_pose;
+        self.previous_velocity = self.velocity;
         self.velocity = step.velocity;
         self.last_command = u;
         let odometry_error = (step.estimated_pose.x - p.x).hypot(step.estimated_pose.y - p.y);
@@ -500,6 +551,7 @@ impl Episode {
             odometry_error,
             solve_time_ns: out.solve_time_ns,
             num_points: out.num_points,
+            movers,
             scanned: step.scanned,
             time: step.time,
         };
@@ -507,6 +559,8 @@ impl Episode {
         s.steps += 1;
         s.time = step.time;
         s.collisions += (contact && !self.in_contact) as u64;
+        s.moving_collisions += (contact && !self.in_contact && speed_before > MOVING_CONTACT_SPEED) as u64;
+        s.mover_steps += (movers > 0) as u64;
         s.contact_steps += contact as u64;
         s.contact_time += cost * self.config.world.dt;
         if deadlock && !s.deadlock {

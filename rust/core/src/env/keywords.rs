@@ -206,6 +206,11 @@ macro_rules! each_field {
         $f!("rotation_weight", shield.rotation_weight);
         $f!("tight_speed", shield.tight_speed);
         $f!("footprint", footprint);
+        $f!("mover_accel", shield.mover_accel);
+        $f!("track_movers", track_movers);
+        $f!("mover_min_speed", movers.min_speed);
+        $f!("mover_max_size", movers.max_size);
+        $f!("mover_max_range", movers.max_range);
         $f!("d_view", planner.d_view);
         $f!("gamma_h", planner.gamma_h);
         $f!("gamma_v", planner.gamma_v);

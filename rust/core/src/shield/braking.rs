@@ -37,6 +37,7 @@
 
 use crate::error::{Error, Result};
 use crate::robot::TrackerConfig;
+use crate::sensors::Mover;
 
 use super::composite::Motion;
 use super::lane::Lane;
@@ -203,6 +204,12 @@ impl BrakingModel {
     /// [`BrakingModel::sweep`] with the replayed path kept in `path` (cleared first), a buffer
     /// the caller reuses from call to call.
     pub fn sweep_with(&self, v0: [f64; 3], command: [f64; 3], path: &mut Vec<[f64; 2]>) -> Sweep {
+        self.sweep_held(v0, command, 1, path)
+    }
+
+    /// [`BrakingModel::sweep_with`] for `command` held `hold` periods (at least one) before
+    /// the brake.
+    pub fn sweep_held(&self, v0: [f64; 3], command: [f64; 3], hold: usize, path: &mut Vec<[f64; 2]>) -> Sweep {
         let t = &self.tracker;
         let dt = self.dt;
         let gain = t.gain(dt);
@@ -227,10 +234,11 @@ impl BrakingModel {
             th_lo = th_lo.min(th);
             th_hi = th_hi.max(th);
             steps += 1;
-            v = t.next_velocity(v, [0.0; 3], gain, dt).0;
+            let held = steps < hold;
+            v = t.next_velocity(v, if held { command } else { [0.0; 3] }, gain, dt).0;
             // once the acceleration limits no longer bind, every component decays by the same
             // factor `1 − gain` per period: the rest of the path is summed in closed form below
-            let lagging = (0..2).all(|k| v[k].abs() * gain <= t.a_max[k] * dt) && v[2].abs() * gain <= t.alpha_max * dt;
+            let lagging = !held && (0..2).all(|k| v[k].abs() * gain <= t.a_max[k] * dt) && v[2].abs() * gain <= t.alpha_max * dt;
             if lagging || steps >= MAX_BRAKE_STEPS {
                 break;
             }
@@ -263,6 +271,84 @@ impl BrakingModel {
         let half_turn = (0.5 * (th_hi - th_lo) + turn).min(std::f64::consts::PI);
         let growth = delta + 2.0 * self.footprint.radius() * (0.5 * half_turn).sin();
         Sweep::new(&self.footprint, end, heading, growth, first_velocity, steps)
+    }
+}
+
+/// Speed (m/s) below which the replayed body counts as standing: a mover reaching it later
+/// reaches a robot at rest.
+pub const REST_SPEED: f64 = 0.02;
+
+impl BrakingModel {
+    /// The least margin (m) between the standing footprint and the movers over the next
+    /// `horizon` seconds (checked every period), with the same growth as
+    /// [`BrakingModel::mover_margin`]: below the clearance, a mover is coming at the robot.
+    pub fn standing_mover_margin(&self, movers: &[Mover], accel: f64, horizon: f64) -> f64 {
+        let mut worst = f64::INFINITY;
+        let steps = (horizon / self.dt).ceil() as usize;
+        for k in 0..=steps {
+            let time = k as f64 * self.dt;
+            for m in movers {
+                let q = [m.centre[0] + time * m.velocity[0], m.centre[1] + time * m.velocity[1]];
+                let spread = m.velocity_std * time + 0.5 * accel * time * time + 0.5 * self.dt * m.velocity[0].hypot(m.velocity[1]);
+                worst = worst.min(self.footprint.clearance(q) - m.radius - spread);
+            }
+        }
+        worst
+    }
+
+    /// The least margin (m) between the footprint and the movers along the replay of
+    /// `command` (one period) and the brake, over the periods in which the body still moves
+    /// (faster than [`REST_SPEED`]): the footprint's clearance of each mover's centre,
+    /// predicted along its velocity, less its radius, less what its velocity's error and an
+    /// acceleration up to `accel` (m/s²) can add by then (`σ_v t + a t²/2`), less half of
+    /// what body and mover move within a period (the poses are checked once per period).
+    /// `f64::INFINITY` when the body stands throughout. A candidate whose margin is at least
+    /// [`BrakingModel::clearance`] leaves the robot at rest before any mover that keeps to
+    /// those bounds reaches it: passive safety.
+    pub fn mover_margin(&self, v0: [f64; 3], command: [f64; 3], movers: &[Mover], accel: f64) -> f64 {
+        self.mover_margin_held(v0, command, 1, movers, accel)
+    }
+
+    /// [`BrakingModel::mover_margin`] for `command` held `hold` periods (at least one) before
+    /// the brake.
+    pub fn mover_margin_held(&self, v0: [f64; 3], command: [f64; 3], hold: usize, movers: &[Mover], accel: f64) -> f64 {
+        if movers.is_empty() {
+            return f64::INFINITY;
+        }
+        let t = &self.tracker;
+        let dt = self.dt;
+        let gain = t.gain(dt);
+        let fp = &self.footprint;
+        let r = fp.radius();
+        let moving = |v: &[f64; 3]| v[0].hypot(v[1]) + r * v[2].abs() > REST_SPEED;
+        let mut worst = f64::INFINITY;
+        let mut check = |time: f64, x: f64, y: f64, s: f64, c: f64, v: &[f64; 3]| {
+            let own = 0.5 * dt * (v[0].hypot(v[1]) + r * v[2].abs());
+            for m in movers {
+                let (dx, dy) = (m.centre[0] + time * m.velocity[0] - x, m.centre[1] + time * m.velocity[1] - y);
+                let q = [c * dx + s * dy, -s * dx + c * dy];
+                let spread = m.velocity_std * time + 0.5 * accel * time * time + own + 0.5 * dt * m.velocity[0].hypot(m.velocity[1]);
+                worst = worst.min(fp.clearance(q) - m.radius - spread);
+            }
+        };
+        if moving(&v0) {
+            check(0.0, 0.0, 0.0, 0.0, 1.0, &v0);
+        }
+        let (mut x, mut y, mut th) = (0.0f64, 0.0f64, 0.0f64);
+        let (mut s, mut c) = (0.0f64, 1.0f64);
+        let mut v = t.next_velocity(v0, command, gain, dt).0;
+        let mut steps = 0;
+        while (steps + 1 < hold || moving(&v)) && steps < MAX_BRAKE_STEPS {
+            x += dt * (c * v[0] - s * v[1]);
+            y += dt * (s * v[0] + c * v[1]);
+            let turn = dt * v[2];
+            th += turn;
+            (s, c) = turned(s, c, turn, th);
+            steps += 1;
+            check(steps as f64 * dt, x, y, s, c, &v);
+            v = t.next_velocity(v, if steps < hold { command } else { [0.0; 3] }, gain, dt).0;
+        }
+        worst
     }
 }
 

@@ -86,6 +86,9 @@ pub struct ShieldConfig {
     /// ellipse row would stop the robot but the footprint's braking check lets it pass
     /// (aisles and doorways narrower than the ellipse). 0 keeps the row's command only.
     pub tight_speed: f64,
+    /// Acceleration (m/s²) up to which the braking shield expects a mover to leave its
+    /// estimated velocity: its predicted disc grows by `a t²/2`.
+    pub mover_accel: f64,
 }
 
 impl Default for ShieldConfig {
@@ -103,6 +106,7 @@ impl Default for ShieldConfig {
             braking: BrakingModel::default(),
             rotation_weight: 4.0,
             tight_speed: 0.5,
+            mover_accel: 0.25,
         }
     }
 }

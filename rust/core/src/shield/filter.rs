@@ -13,6 +13,7 @@ use super::qp::{self, QpSolution, MAX_VARS};
 use super::scan::{select_points, ScanScratch};
 use crate::error::{Error, Result};
 use crate::math::{mat_vec, Mat3, Vec3};
+use crate::sensors::Mover;
 
 /// Everything one filter call produced.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,6 +61,9 @@ pub struct ShieldOutcome {
     /// (`f64::MAX` when none is within reach); NaN when no check ran.
     pub clearance: f64,
 }
+
+/// The largest `mover_accel` (m/s²) accepted.
+pub const MAX_MOVER_ACCEL: f64 = 50.0;
 
 /// The safety shield: configuration, scratch buffers and the SIMD level of its kernel.
 #[derive(Debug, Clone)]
@@ -136,6 +140,9 @@ impl Shield {
         config.braking.validate()?;
         if !(config.tight_speed.is_finite() && (0.0..=MAX_BODY_RATE).contains(&config.tight_speed)) {
             return Err(Error::invalid("tight_speed", format!("must be from 0 to {MAX_BODY_RATE} m/s, got {}", config.tight_speed)));
+        }
+        if !(config.mover_accel.is_finite() && (0.0..=MAX_MOVER_ACCEL).contains(&config.mover_accel)) {
+            return Err(Error::invalid("mover_accel", format!("must be from 0 to {MAX_MOVER_ACCEL} m/s², got {}", config.mover_accel)));
         }
         if !(config.rotation_weight.is_finite() && (1e-3..=1e3).contains(&config.rotation_weight)) {
             return Err(Error::invalid("rotation_weight", format!("must be from 1e-3 to 1e3, got {}", config.rotation_weight)));
@@ -259,7 +266,7 @@ impl Shield {
             Points::F32(p) => p.chunks_exact(stride).for_each(|c| push([c[0] as f64, c[1] as f64, if stride == 3 { c[2] as f64 } else { 0.0 }])),
             Points::F64(p) => p.chunks_exact(stride).for_each(|c| push([c[0], c[1], if stride == 3 { c[2] } else { 0.0 }])),
         }
-        let out = Scan::new_f64(&body, stride).and_then(|s| self.filter_with(&s, state, u_nom, extra));
+        let out = Scan::new_f64(&body, stride).and_then(|s| self.filter_with(&s.with_movers(scan.movers), state, u_nom, extra));
         self.body = body;
         out
     }
@@ -311,11 +318,11 @@ impl Shield {
         let moved = match scan.points {
             Points::F32(p) => {
                 move_points(p, scan.stride, &m, &mut b32);
-                Scan::new_f32(&b32, scan.stride)
+                Scan::new_f32(&b32, scan.stride).map(|s| s.with_movers(scan.movers))
             }
             Points::F64(p) => {
                 move_points(p, scan.stride, &m, &mut b64);
-                Scan::new_f64(&b64, scan.stride)
+                Scan::new_f64(&b64, scan.stride).map(|s| s.with_movers(scan.movers))
             }
         };
         let out = moved.and_then(|moved| f(self, &moved));
@@ -382,6 +389,12 @@ impl Shield {
             return Err(Error::DimensionMismatch { name: "u_nom", expected: dim, got: u_nom.len() });
         }
         finite("u_nom", u_nom)?;
+        for m in scan.movers {
+            m.validate()?;
+        }
+        if !scan.movers.is_empty() && dim != 2 {
+            return Err(Error::invalid("movers", "moving objects are taken by a planar shield only"));
+        }
         if scan.stride < dim {
             return Err(Error::DimensionMismatch { name: "points", expected: dim, got: scan.stride });
         }
@@ -410,14 +423,41 @@ impl Shield {
         let u_max = self.config.u_max.clone();
         let b = self.barrier(scan, state)?;
         let g = to_world(&r, dim, &b.grad_body);
+        let dh_movers = self.movers_dh_dt(scan.movers, b.value);
         let sol = if self.config.method == ShieldMethod::Unfiltered {
             let mut u = [0.0; MAX_VARS];
             u[..dim].copy_from_slice(u_nom);
             QpSolution { u, active: false, feasible: true }
         } else {
-            self.solve_row(u_nom, &g, -alpha * b.value - b.dh_dt, u_max.as_deref(), extra)?
+            self.solve_row(u_nom, &g, -alpha * b.value - b.dh_dt - dh_movers, u_max.as_deref(), extra)?
         };
-        Ok(Filtered::unchecked(b.value, b.h_min, g, b.dh_dt, b.num_points, sol, state.omega))
+        Ok(Filtered::unchecked(b.value, b.h_min, g, b.dh_dt + dh_movers, b.num_points, sol, state.omega))
+    }
+}
+
+impl Shield {
+    /// The movers' share of `∂H/∂t`: each mover's nearest point `q` (its disc's point nearest
+    /// the robot) moves at the mover's velocity `v`, `ḣ = ∂h/∂q · v = 2 A q · v`, weighed as
+    /// the composite weighs the points it stands for, `min(1, λ) sech²(h/γ)` with `λ` the
+    /// point's soft-min weight `exp(−κ (tanh(h/γ) − H/γ))` given `H`: 1 where the mover holds
+    /// the nearest point, as its cluster's weights sum to about 1 there.
+    pub(super) fn movers_dh_dt(&self, movers: &[Mover], value: f64) -> f64 {
+        let (gamma, kappa) = (self.config.gamma, self.config.kappa);
+        movers
+            .iter()
+            .map(|m| {
+                let c = m.centre;
+                let d = c[0].hypot(c[1]);
+                let k = if d > m.radius { 1.0 - m.radius / d } else { 0.0 };
+                let q = [k * c[0], k * c[1], 0.0];
+                let h = self.envelope.h_body(&q);
+                let g = self.envelope.grad_body(&q);
+                let hdot = -(g[0] * m.velocity[0] + g[1] * m.velocity[1]);
+                let th = (h / gamma).tanh();
+                let weight = (-kappa * (th - value / gamma)).exp().min(1.0) * (1.0 - th * th);
+                weight * hdot
+            })
+            .sum()
     }
 }
 

@@ -26,6 +26,14 @@ const SEARCH_SCALES: usize = 3;
 /// The row's command is *stalled* when its progress along the nominal command is below this
 /// share of the tight-space command's speed: the tight-space candidate is then weighed too.
 const STALL: f64 = 0.5;
+/// How far ahead (s) a mover's predicted disc is checked against the standing footprint: a
+/// mover reaching it within this time makes the shield weigh the escapes.
+const THREAT_HORIZON: f64 = 2.5;
+/// How long (s) an escape is held in its check before the brake.
+const ESCAPE_HOLD: f64 = 1.0;
+/// The escapes' directions in the body frame (shares of the box): back, to either side, and
+/// back to either side.
+const ESCAPES: [[f64; 2]; 5] = [[-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-0.7, 0.7], [-0.7, -0.7]];
 
 /// What the check decided.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,6 +42,8 @@ pub(super) struct Decision {
     pub command: Option<[f64; 3]>,
     /// The tight-space candidate (the nominal command at most `tight_speed`) was chosen.
     pub tight: bool,
+    /// An escape from a mover coming at the robot was sent.
+    pub escaping: bool,
     /// The least clearance of the standing footprint (m).
     pub clearance: f64,
     /// The row's full command's swept clearance less the clearance required (m).
@@ -41,7 +51,10 @@ pub(super) struct Decision {
 }
 
 /// The candidates of one call: the row's command and the tight-space command, body frame.
-struct Candidates {
+struct Candidates<'a> {
+    /// The moving objects, and the acceleration they may add.
+    movers: &'a [crate::sensors::Mover],
+    mover_accel: f64,
     row: [f64; 3],
     tight: [f64; 3],
     /// The nominal translation's unit direction (zero for a nominal at rest).
@@ -54,25 +67,30 @@ struct Candidates {
     rotation: crate::math::Mat3,
     /// The body's measured velocity.
     v0: [f64; 3],
+    /// The world-frame box of the translation.
+    box_world: [f64; 2],
     /// The row's and the tight-space command in the world frame (translation, `ω`): what is
     /// sent, scaled, so the box holds exactly.
     row_world: [f64; 3],
     tight_world: [f64; 3],
 }
 
-fn progress(c: &Candidates, cmd: &[f64; 3], scale: f64) -> f64 {
+fn progress(c: &Candidates<'_>, cmd: &[f64; 3], scale: f64) -> f64 {
     scale * (cmd[0] * c.direction[0] + cmd[1] * c.direction[1])
 }
 
 /// The check on the points of `set`: the row's command, else the largest safe fraction of it
 /// or of the tight-space command, whichever makes more progress, else the brake.
-fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_, T>, near: &mut Vec<T>, c: &Candidates, path: &mut Vec<[f64; 2]>, extra: Option<&LinearConstraints>) -> Decision {
+fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_, T>, near: &mut Vec<T>, c: &Candidates<'_>, path: &mut Vec<[f64; 2]>, extra: Option<&LinearConstraints>) -> Decision {
+    // the movers: the body at rest before any reaches it (see `BrakingModel::mover_margin`)
+    let clear_of_movers = |cmd: &[f64; 3]| c.movers.is_empty() || model.mover_margin(c.v0, *cmd, c.movers, c.mover_accel) >= model.clearance();
     let here = Planes::of_footprint(&model.footprint);
     let keep = model.clearance();
     let row = model.sweep_with(c.v0, c.row, path);
     let tight = model.sweep_with(c.v0, c.tight, path);
     // (a fraction's sweep reaching farther than this fails: the points beyond are not kept)
     let reach = row.extent.max(tight.extent) + keep + REACH_SLACK;
+    let whole = set;
     near.clear();
     let ([row_raw], clearance) = if c.all_far {
         ([f64::MAX], f64::MAX)
@@ -96,7 +114,9 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         let (s, c) = sw.heading.sin_cos();
         model.footprint.edges().enumerate().any(|(j, (n, _))| held >> j & 1 == 1 && (c * n[0] - s * n[1]) * sw.chord[0] + (s * n[0] + c * n[1]) * sw.chord[1] > ROUNDING)
     };
-    let passes = |sw: &Sweep, raw: f64| sw.extent + keep <= reach && if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE && !toward_held(sw) } else { raw - sw.growth >= keep };
+    let passes = |sw: &Sweep, raw: f64, cmd: &[f64; 3]| {
+        sw.extent + keep <= reach && (if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE && !toward_held(sw) } else { raw - sw.growth >= keep }) && clear_of_movers(cmd)
+    };
     let sweep_margin = row_raw.min(f64::MAX / 2.0) - row.growth - required;
     let near_set = PointSet { pts: &near[..], stride: 2, motion: None, reach: f64::INFINITY, band: None };
     let largest = |cmd: &[f64; 3], full_passes: bool, path: &mut Vec<[f64; 2]>| -> Option<f64> {
@@ -108,7 +128,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
             let scales: [f64; SEARCH_SCALES] = std::array::from_fn(|k| lo + (hi - lo) * (k + 1) as f64 / (SEARCH_SCALES + 1) as f64);
             let sweeps: [Sweep; SEARCH_SCALES] = std::array::from_fn(|k| model.sweep_with(c.v0, cmd.map(|v| v * scales[k]), path));
             let (raw, _): ([f64; SEARCH_SCALES], f64) = clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, near_set, None, keep, level);
-            match (0..SEARCH_SCALES).rev().find(|&k| passes(&sweeps[k], raw[k])) {
+            match (0..SEARCH_SCALES).rev().find(|&k| passes(&sweeps[k], raw[k], &cmd.map(|v| v * scales[k]))) {
                 Some(k) => {
                     (lo, found) = (scales[k], Some(scales[k]));
                     if k + 1 < SEARCH_SCALES {
@@ -120,7 +140,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         }
         found
     };
-    let mut row_scale = largest(&c.row, passes(&row, row_raw), path);
+    let mut row_scale = largest(&c.row, passes(&row, row_raw, &c.row), path);
     let (mut row_cmd, mut row_world) = (c.row, c.row_world);
     if within && row_scale != Some(1.0) {
         // within the clearance a turn grows the sweep and a held edge forbids its side: the
@@ -137,7 +157,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         let world = crate::math::mat_vec(&c.rotation, &straight);
         let sw = model.sweep_with(c.v0, straight, path);
         let ([raw], _) = clearances_of([&sw.planes], &here, near_set, None, keep, level);
-        let s = largest(&straight, passes(&sw, raw), path);
+        let s = largest(&straight, passes(&sw, raw, &straight), path);
         let speed = |s: Option<f64>, t: &[f64; 3]| s.map_or(-1.0, |s| s * t[0].hypot(t[1]));
         if speed(s, &straight) > speed(row_scale, &c.row) {
             (row_scale, row_cmd, row_world) = (s, straight, [world[0], world[1], 0.0]);
@@ -150,7 +170,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
     // where the row has no safe fraction at all
     if row_progress < c.stall && (!within || row_scale.is_none()) {
         let ([tight_raw], _) = if c.all_far { ([f64::MAX], 0.0) } else { clearances_of([&tight.planes], &here, near_set, None, keep, level) };
-        if let Some(s) = largest(&c.tight, passes(&tight, tight_raw), path) {
+        if let Some(s) = largest(&c.tight, passes(&tight, tight_raw, &c.tight), path) {
             let tight_world = c.tight_world.map(|v| v * s);
             // the user's rows hold for the tight-space command as sent (a fraction of a
             // command that meets `aᵀu ≥ b` with b > 0 may not)
@@ -163,7 +183,42 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
             }
         }
     }
-    Decision { command: chosen.map(|(cmd, _)| cmd), tight: chosen.is_some_and(|(_, t)| t), clearance, sweep_margin }
+    // a mover coming at the standing robot: stepping out of its way beats being reached at
+    // rest. Each escape is held for ESCAPE_HOLD in its check, then the brake: it passes the
+    // static check over every point and keeps the movers' margin while the robot moves; the
+    // one keeping the most margin is sent
+    let mut escaping = false;
+    if !c.movers.is_empty() && model.standing_mover_margin(c.movers, c.mover_accel, THREAT_HORIZON) < keep {
+        let hold = (ESCAPE_HOLD / model.dt).ceil().max(1.0) as usize;
+        let t = &model.tracker;
+        let cmds: [[f64; 3]; ESCAPES.len()] = std::array::from_fn(|k| {
+            let body = [ESCAPES[k][0] * t.v_max[0], ESCAPES[k][1] * t.v_max[1], 0.0];
+            let w = crate::math::mat_vec(&c.rotation, &body);
+            // within the world-frame box
+            let scale = (0..2).map(|j| if w[j].abs() > c.box_world[j] { c.box_world[j] / w[j].abs() } else { 1.0 }).fold(1.0, f64::min);
+            body.map(|v| v * scale)
+        });
+        let sweeps: [Sweep; ESCAPES.len()] = std::array::from_fn(|k| model.sweep_held(c.v0, cmds[k], hold, path));
+        let (raw, _) = if c.all_far { ([f64::MAX; ESCAPES.len()], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
+        let meets = |world: &[f64; 3]| {
+            (0..extra.map_or(0, |e| e.len())).all(|k| {
+                let (a, b) = extra.map_or((&[][..], 0.0), |e| e.row(k));
+                a.iter().zip(world).map(|(a, u)| a * u).sum::<f64>() >= b - 1e-9 * (1.0 + b.abs())
+            })
+        };
+        let best = (0..ESCAPES.len())
+            .filter(|&k| if within { raw[k] >= clearance - ROUNDING && sweeps[k].growth <= TOLERANCE && !toward_held(&sweeps[k]) } else { raw[k] - sweeps[k].growth >= keep })
+            .map(|k| (k, model.mover_margin_held(c.v0, cmds[k], hold, c.movers, c.mover_accel)))
+            .filter(|&(_, m)| m >= keep)
+            .map(|(k, m)| (k, m, crate::math::mat_vec(&c.rotation, &cmds[k])))
+            .filter(|(_, _, w)| meets(w))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((_, _, w)) = best {
+            chosen = Some(([w[0], w[1], 0.0], false));
+            escaping = true;
+        }
+    }
+    Decision { command: chosen.map(|(cmd, _)| cmd), tight: chosen.is_some_and(|(_, t)| t), escaping, clearance, sweep_margin }
 }
 
 /// The footprint's edges (bit `j` for edge `j`) that a point within `keep` of the footprint
@@ -216,13 +271,15 @@ impl Shield {
             row[dim + k] = b.grad_omega[axis] / w;
             lim[dim + k] = w * t.w_max;
         }
-        let mut sol = self.solve_row_n(&x_nom[..n], &row[..n], -alpha * b.value, &lim[..n], extra)?;
+        // moving objects add their share of ∂H/∂t (the robot's own turn is the ω column)
+        let dh_movers = self.movers_dh_dt(scan.movers(), b.value);
+        let mut sol = self.solve_row_n(&x_nom[..n], &row[..n], -alpha * b.value - dh_movers, &lim[..n], extra)?;
         for k in dim..n {
             sol.u[k] /= w;
         }
         let recovering = b.h_min < 0.0;
-        let mut decision = Decision { command: Some([sol.u[0], sol.u[1], sol.u[2]]), tight: false, clearance: f64::MAX, sweep_margin: f64::NAN };
-        if dim == 2 && b.num_points > 0 {
+        let mut decision = Decision { command: Some([sol.u[0], sol.u[1], sol.u[2]]), tight: false, escaping: false, clearance: f64::MAX, sweep_margin: f64::NAN };
+        if dim == 2 && (b.num_points > 0 || !scan.movers().is_empty()) {
             let v0 = *state.velocity.as_ref().ok_or_else(|| Error::invalid("velocity", "the braking shield needs the body's measured velocity (v_x, v_y, ω), body frame"))?;
             // the tight-space command: the nominal one in the box and the user's rows
             let nominal = match extra {
@@ -233,7 +290,7 @@ impl Shield {
                     Some(t.u)
                 }
             };
-            let c = self.candidates(&b, state, u_nom, &sol, v0, nominal);
+            let c = self.candidates(&b, state, u_nom, &sol, v0, nominal, scan.movers());
             decision = self.check(scan, &c, extra);
             match decision.command {
                 Some(cmd) => {
@@ -252,7 +309,7 @@ impl Shield {
         } else {
             omega_out.copy_from_slice(&sol.u[3..6]);
         }
-        let dh_dt = (0..3).map(|k| b.grad_omega[k] * omega_out[k]).sum();
+        let dh_dt = (0..3).map(|k| b.grad_omega[k] * omega_out[k]).sum::<f64>() + dh_movers;
         Ok(Filtered {
             value: b.value,
             h_min: b.h_min,
@@ -271,7 +328,17 @@ impl Shield {
 
     /// The row's command and the tight-space command in the body frame, and what the
     /// composite pass already tells of the points' distance.
-    fn candidates(&self, b: &CompositeBarrier, state: &BodyState, u_nom: &[f64], sol: &QpSolution, v0: [f64; 3], nominal: Option<[f64; MAX_VARS]>) -> Candidates {
+    #[allow(clippy::too_many_arguments)]
+    fn candidates<'a>(
+        &self,
+        b: &CompositeBarrier,
+        state: &BodyState,
+        u_nom: &[f64],
+        sol: &QpSolution,
+        v0: [f64; 3],
+        nominal: Option<[f64; MAX_VARS]>,
+        movers: &'a [crate::sensors::Mover],
+    ) -> Candidates<'a> {
         let r = &state.rotation;
         let row_t = crate::math::mat_t_vec(r, &[sol.u[0], sol.u[1], 0.0]);
         let t = &self.config.braking.tracker;
@@ -297,6 +364,9 @@ impl Shield {
             + REACH_SLACK;
         let all_far = b.h_min >= 0.0 && shortest * (1.0 + b.h_min.min(1e12)).sqrt() > bound;
         Candidates {
+            movers,
+            mover_accel: self.config.mover_accel,
+            box_world: [lim[0], lim[1]],
             v0,
             row: [row_t[0], row_t[1], sol.u[2]],
             tight: nom.map(|v| v * cap),
@@ -310,7 +380,7 @@ impl Shield {
     }
 
     /// The check over the points the composite used.
-    fn check(&mut self, scan: &Scan, c: &Candidates, extra: Option<&LinearConstraints>) -> Decision {
+    fn check(&mut self, scan: &Scan, c: &Candidates<'_>, extra: Option<&LinearConstraints>) -> Decision {
         let model = self.config.braking;
         let mut path = std::mem::take(&mut self.brake_path);
         let level = self.level;

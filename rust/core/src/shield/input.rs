@@ -4,6 +4,7 @@ use super::composite::Motion;
 use super::config::{finite, ROTATION_TOLERANCE};
 use crate::error::{Error, Result};
 use crate::math::{det, orthonormality_error, rot_z, Mat3, Vec3};
+use crate::sensors::Mover;
 
 /// The robot's orientation and angular velocity when the scan was taken.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,13 +80,15 @@ pub enum Points<'a> {
     F64(&'a [f64]),
 }
 
-/// A scan: points, their row stride, and an optional [`Motion`] that moves them into the
-/// current body frame before use (for points measured in an earlier frame).
+/// A scan: points, their row stride, an optional [`Motion`] that moves them into the
+/// current body frame before use (for points measured in an earlier frame), and the moving
+/// objects seen in it ([`Mover`]s, current body frame, not moved by the motion).
 #[derive(Debug, Clone, Copy)]
 pub struct Scan<'a> {
     pub(super) points: Points<'a>,
     pub(super) stride: usize,
     pub(super) motion: Option<Motion>,
+    pub(super) movers: &'a [Mover],
 }
 
 impl<'a> Scan<'a> {
@@ -100,7 +103,20 @@ impl<'a> Scan<'a> {
         if len % stride != 0 {
             return Err(Error::invalid("points", format!("{len} values do not make rows of {stride}")));
         }
-        Ok(Self { points, stride, motion: None })
+        Ok(Self { points, stride, motion: None, movers: &[] })
+    }
+
+    /// The same points with the moving objects `movers` (current body frame): the braking
+    /// shield keeps the robot from driving into their predicted positions, and the braking and
+    /// composite rows take their motion into `∂H/∂t`. The points keep the objects' returns
+    /// too, as static at their current positions.
+    pub fn with_movers(self, movers: &'a [Mover]) -> Self {
+        Self { movers, ..self }
+    }
+
+    /// The moving objects.
+    pub fn movers(&self) -> &'a [Mover] {
+        self.movers
     }
 
     /// The same points, moved by `motion` before use (crop, band and barrier see the moved
