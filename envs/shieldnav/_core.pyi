@@ -85,6 +85,7 @@ class Shield:
         footprint: tuple[float, float] | Sequence[Sequence[float]] | npt.ArrayLike | None = ...,
         lidar_noise_std: float = ...,
         tight_speed: float = ...,
+        mover_accel: float = ...,
     ) -> Shield: ...
     def filter(
         self,
@@ -96,6 +97,7 @@ class Shield:
         extra_A: npt.NDArray[np.float64] | None = None,
         extra_b: _Vec | None = None,
         velocity: _Vec | None = None,
+        movers: npt.NDArray[np.float64] | None = None,
     ) -> ShieldOutcome: ...
     def filter_world(
         self,
@@ -108,6 +110,7 @@ class Shield:
         extra_A: npt.NDArray[np.float64] | None = None,
         extra_b: _Vec | None = None,
         velocity: _Vec | None = None,
+        movers: npt.NDArray[np.float64] | None = None,
     ) -> ShieldOutcome: ...
     @property
     def config(self) -> dict[str, Any]: ...

@@ -149,6 +149,7 @@ impl PyBatch {
         info.set_item("odometry_error", col(&|s| s.report.odometry_error))?;
         info.set_item("solve_time_ns", PyArray1::from_iter(py, out.iter().map(|s| s.report.solve_time_ns)))?;
         info.set_item("num_points", PyArray1::from_iter(py, out.iter().map(|s| s.report.num_points)))?;
+        info.set_item("movers", PyArray1::from_iter(py, out.iter().map(|s| s.report.movers)))?;
         info.set_item("time", col(&|s| s.report.time))?;
         let u = |f: &dyn Fn(&SlotOutcome) -> [f64; 3]| PyArray1::from_iter(py, out.iter().flat_map(f)).reshape([n, 3]);
         info.set_item("u_nom", u(&|s| s.report.u_nom)?)?;

@@ -62,6 +62,7 @@ fn info<'py>(py: Python<'py>, r: &StepReport) -> PyResult<Bound<'py, PyDict>> {
     d.set_item(intern!(py, "odometry_error"), r.odometry_error)?;
     d.set_item(intern!(py, "solve_time_ns"), r.solve_time_ns)?;
     d.set_item(intern!(py, "num_points"), r.num_points)?;
+    d.set_item(intern!(py, "movers"), r.movers)?;
     d.set_item(intern!(py, "time"), r.time)?;
     Ok(d)
 }
@@ -72,6 +73,8 @@ pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<
     d.set_item("steps", s.steps)?;
     d.set_item("time", s.time)?;
     d.set_item("collisions", s.collisions)?;
+    d.set_item("moving_collisions", s.moving_collisions)?;
+    d.set_item("mover_steps", s.mover_steps)?;
     d.set_item("contact_steps", s.contact_steps)?;
     d.set_item("contact_time", s.contact_time)?;
     d.set_item("deadlock", s.deadlock)?;

@@ -220,6 +220,7 @@ pub mod shield_args {
     named_arg!(rotation_weight, f64, real_arg, "rotation_weight", "the weight of a turn against a speed");
     named_arg!(lidar_noise_std, f64, real_arg, "lidar_noise_std", "the range noise's standard deviation in m");
     named_arg!(tight_speed, f64, real_arg, "tight_speed", "the tight-space speed in m/s");
+    named_arg!(mover_accel, f64, real_arg, "mover_accel", "the movers' acceleration bound in m/s²");
     named_arg!(footprint, Option<shieldnav_core::shield::Footprint>, footprint_arg, "footprint", "(length, width) in m, an (M, 2) convex polygon in m, or None");
     named_arg!(yaw, Option<f64>, opt_real_arg, "yaw", "the heading in rad, or None");
 }

@@ -5,6 +5,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use shieldnav_core::math::{rot_z, Mat3};
 use shieldnav_core::robot::TrackerConfig;
+use shieldnav_core::sensors::Mover;
 use shieldnav_core::shield::{BodyState, BrakingModel, Footprint, LinearConstraints, Scan, ScanFilter, Shield, ShieldConfig, ShieldMethod};
 
 use crate::errors::{invalid, to_py};
@@ -60,7 +61,7 @@ impl<'py> PointsArg<'py> {
 ///        method="composite", safety_distance=0.8, height_band=(-0.4, 1.5), voxel_size=None,
 ///        angular_bins=None, grad_eps=1e-9, tracker_tau=0.15, a_max=(2.0, 2.0), w_max=1.5,
 ///        yaw_accel_max=4.0, dt=0.02, brake_margin=0.01, rotation_weight=4.0, footprint=None,
-///        lidar_noise_std=0.01, tight_speed=0.5)
+///        lidar_noise_std=0.01, tight_speed=0.5, mover_accel=0.25)
 ///
 /// The composite control-barrier-function safety shield (paper Sec. III) and its baselines.
 ///
@@ -102,6 +103,8 @@ impl<'py> PointsArg<'py> {
 ///         rectangle, or a convex polygon [[x, y], ...] (m, body frame, Nav2's `footprint`
 ///         convention) holding the origin; None: 1.1 x 0.5 m.
 ///     lidar_noise_std: the range noise's standard deviation (m): the check keeps 3 of them.
+///     mover_accel: acceleration (m/s²) up to which a moving object may leave its estimated
+///         velocity: its predicted disc grows by a t²/2 (see `filter(movers=...)`).
 ///     tight_speed: speed (m/s) up to which the braking shield follows the nominal command
 ///         where the ellipse row stalls but the footprint passes; 0 keeps the row's command.
 ///     rotation_weight: w in min |u - u_nom|^2 + w^2 |omega - omega_nom|^2 (method
@@ -140,6 +143,7 @@ impl PyShield {
         footprint = None,
         lidar_noise_std = BrakingModel::default().lidar_noise_std,
         tight_speed = ShieldConfig::default().tight_speed,
+        mover_accel = ShieldConfig::default().mover_accel,
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -165,6 +169,7 @@ impl PyShield {
         #[pyo3(from_py_with = crate::errors::shield_args::footprint)] footprint: Option<Footprint>,
         #[pyo3(from_py_with = crate::errors::shield_args::lidar_noise_std)] lidar_noise_std: f64,
         #[pyo3(from_py_with = crate::errors::shield_args::tight_speed)] tight_speed: f64,
+        #[pyo3(from_py_with = crate::errors::shield_args::mover_accel)] mover_accel: f64,
     ) -> PyResult<Self> {
         let mut tracker = TrackerConfig { tau: tracker_tau, a_max, w_max, alpha_max: yaw_accel_max, ..TrackerConfig::default() };
         if let Some(m) = u_max.as_deref().filter(|m| m.len() == 2) {
@@ -184,6 +189,7 @@ impl PyShield {
             braking: BrakingModel { tracker, dt, brake_margin, lidar_noise_std, footprint: footprint.unwrap_or_default() },
             rotation_weight,
             tight_speed,
+            mover_accel,
         };
         Ok(Self { inner: Shield::new(config).map_err(to_py)? })
     }
@@ -200,7 +206,11 @@ impl PyShield {
     /// the body's measured (vx, vy, omega), body frame. Returns a `ShieldOutcome` (u, omega,
     /// H, h_min, grad_p, dH_dt, num_points, active, feasible, braked, recovering, sweep_h, tight, clearance,
     /// solve_time_ns); bad input raises `InvalidArgumentError` naming the argument.
-    #[pyo3(signature = (points, u_nom, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None, velocity = None))]
+    /// `movers` (K, 5) or (K, 6) rows `x, y, vx, vy, radius[, velocity_std]` (body frame, m
+    /// and m/s; the velocity over the ground in the body's axes) are moving objects: the
+    /// braking shield keeps the robot at rest before any reaches it and steps out of the way
+    /// of one coming at it; both rows take their motion into dH/dt (planar shields).
+    #[pyo3(signature = (points, u_nom, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None, velocity = None, movers = None))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn filter(
         &mut self,
@@ -213,14 +223,15 @@ impl PyShield {
         extra_A: Option<&Bound<'_, PyAny>>,
         extra_b: Option<&Bound<'_, PyAny>>,
         velocity: Option<&Bound<'_, PyAny>>,
+        movers: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyShieldOutcome> {
-        self.run(py, points, u_nom, None, yaw, omega, rotation, extra_A, extra_b, velocity)
+        self.run(py, points, u_nom, None, yaw, omega, rotation, extra_A, extra_b, velocity, movers)
     }
 
     /// Like `filter`, for world-frame points and the robot at `position`: (x, y) or
     /// (x, y, z) for a planar shield (the height band of (N, 3) points applies to their
     /// height above z, 0 if not given), (x, y, z) for a 3D one.
-    #[pyo3(signature = (points, u_nom, position, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None, velocity = None))]
+    #[pyo3(signature = (points, u_nom, position, yaw = None, omega = None, rotation = None, extra_A = None, extra_b = None, velocity = None, movers = None))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn filter_world(
         &mut self,
@@ -234,8 +245,9 @@ impl PyShield {
         extra_A: Option<&Bound<'_, PyAny>>,
         extra_b: Option<&Bound<'_, PyAny>>,
         velocity: Option<&Bound<'_, PyAny>>,
+        movers: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyShieldOutcome> {
-        self.run(py, points, u_nom, Some(position), yaw, omega, rotation, extra_A, extra_b, velocity)
+        self.run(py, points, u_nom, Some(position), yaw, omega, rotation, extra_A, extra_b, velocity, movers)
     }
 
     /// The configuration as a dict of the constructor's keyword arguments.
@@ -268,6 +280,17 @@ impl PyShield {
     }
 }
 
+/// `movers`: None, or a (K, 5) / (K, 6) array of `x, y, vx, vy, radius[, velocity_std]`.
+fn movers_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Mover>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(Vec::new()) };
+    let a: PyReadonlyArray2<'_, f64> = obj.extract().map_err(|_| invalid("movers", "expected a float64 (K, 5) or (K, 6) array: x, y, vx, vy, radius[, velocity_std]"))?;
+    let a = a.as_array();
+    if a.ncols() != 5 && a.ncols() != 6 {
+        return Err(invalid("movers", format!("expected 5 or 6 columns (x, y, vx, vy, radius[, velocity_std]), got {}", a.ncols())));
+    }
+    Ok(a.rows().into_iter().map(|r| Mover { centre: [r[0], r[1]], velocity: [r[2], r[3]], radius: r[4], velocity_std: if r.len() == 6 { r[5] } else { 0.0 } }).collect())
+}
+
 /// `method`, a string, else an `InvalidArgumentError` naming it.
 fn method_arg(obj: &Bound<'_, PyAny>) -> PyResult<String> {
     obj.extract::<String>().map_err(|_| invalid("method", format!("expected a method name (str), got {}", obj.repr().map(|r| r.to_string()).unwrap_or_default())))
@@ -287,10 +310,12 @@ impl PyShield {
         extra_a: Option<&Bound<'_, PyAny>>,
         extra_b: Option<&Bound<'_, PyAny>>,
         velocity: Option<&Bound<'_, PyAny>>,
+        movers: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyShieldOutcome> {
         let dim = self.inner.dim();
         let pts = PointsArg::extract(points)?;
-        let scan = pts.scan()?;
+        let movers = movers_arg(movers)?;
+        let scan = pts.scan()?.with_movers(&movers);
         let u = vector("u_nom", u_nom)?;
         let mut state = body_state(dim, yaw, omega, rotation)?;
         if let Some(v) = velocity {
@@ -412,6 +437,7 @@ fn config_dict<'py>(py: Python<'py>, c: &ShieldConfig) -> PyResult<Bound<'py, Py
     d.set_item("footprint", c.braking.footprint.vertices().iter().map(|v| v.to_vec()).collect::<Vec<_>>())?;
     d.set_item("lidar_noise_std", c.braking.lidar_noise_std)?;
     d.set_item("tight_speed", c.tight_speed)?;
+    d.set_item("mover_accel", c.mover_accel)?;
     Ok(d)
 }
 

@@ -327,6 +327,8 @@ impl RawParams {
             },
             rotation_weight: g.float("rotation_weight", d.rotation_weight)?,
             tight_speed: g.float("tight_speed", d.tight_speed)?,
+            // (the node tracks no movers: its scans are taken as static)
+            mover_accel: d.mover_accel,
         };
         // the core's checks, whose errors name the field (its names are the parameters')
         Shield::new(shield.clone()).map_err(core_error)?;
