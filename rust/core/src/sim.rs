@@ -289,6 +289,7 @@ impl World {
     /// rad/s). A scan is taken whenever the LIDAR's period has elapsed.
     pub fn step(&mut self, command: [Real; 3]) -> Result<StepOutcome> {
         let dt = self.config.dt;
+        self.steer_chasers(dt);
         let tr = self.tracker.step(command, dt)?;
         // (the steps times dt, not a running sum: 1 000 steps of 0.02 s added up to 19.99999…,
         // and what is scheduled at 20 s came a step late)
@@ -313,6 +314,26 @@ impl World {
             self.take_scan()?;
         }
         Ok(StepOutcome { time: self.time, true_pose, estimated_pose, velocity, contacts: self.contacts, scanned, saturated: tr.saturated })
+    }
+
+    /// Each chaser's key pose for the coming step: straight toward the robot's position by
+    /// `speed · dt` (at most the distance), heading kept.
+    fn steer_chasers(&mut self, dt: Real) {
+        let robot = self.physics.robot_pose();
+        let t_next = (self.steps + 1) as Real * dt;
+        for c in &self.scenario.chasers {
+            if t_next <= c.start_time {
+                continue;
+            }
+            let tr = &mut self.scenario.obstacles[c.obstacle].trajectory;
+            let p = tr.pose_at(self.time);
+            let (dx, dy) = (robot.x - p.x, robot.y - p.y);
+            let d = dx.hypot(dy);
+            let s = if d > 1e-9 { (c.speed * dt).min(d) / d } else { 0.0 };
+            if tr.keys.last().is_some_and(|(t, _)| *t < t_next) {
+                tr.keys.push((t_next, Pose2::new(p.x + s * dx, p.y + s * dy, p.yaw)));
+            }
+        }
     }
 
     /// The latest scan.

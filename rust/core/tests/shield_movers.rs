@@ -64,3 +64,25 @@ fn taken_as_static_the_walkers_are_driven_into() {
     assert!(moving > 0, "the static-assumption shield was expected to drive into a walker");
     assert!(3 * steps_tracked < steps_static, "contact steps: tracked {steps_tracked}, static {steps_static}");
 }
+
+/// The hall with a chaser starting at `start`, steering at the robot at `speed`.
+fn chased(start: [f64; 2], speed: f64) -> Site {
+    let Site::Scenario(mut s) = hall(&[[0.0, 7.0], [1.0, 7.0]], 0.1) else { unreachable!() };
+    s.map = StaticMap::new();
+    s.obstacles[0].trajectory = Trajectory::fixed(Pose2::new(start[0], start[1], 0.0));
+    s.chasers.push(shieldnav_core::world::Chaser { obstacle: 0, speed, start_time: 0.0 });
+    Site::Scenario(s)
+}
+
+/// A chaser slower than the robot (1.0–1.4 m/s against its 1.6) in open space, from ahead,
+/// behind and either side, whatever the policy holds (standing, full ahead, circling, every
+/// limit at once): the robot turns and runs, and is never touched in 30 s.
+#[test]
+fn a_chaser_slower_than_the_robot_never_touches_it_in_open_space() {
+    for (start, speed) in [([6.0, 0.0], 1.0), ([-5.0, 2.0], 1.0), ([0.0, 5.0], 1.2), ([6.0, 0.0], 1.4)] {
+        for action in [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.0, 0.5], [-1.0, 1.0, 1.0]] {
+            let s = run(&chased(start, speed), true, action, 1500);
+            assert_eq!(s.contact_steps, 0, "chaser from {start:?} at {speed} m/s, {action:?}: {s:?}");
+        }
+    }
+}

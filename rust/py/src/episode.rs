@@ -73,6 +73,7 @@ pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<
     d.set_item("steps", s.steps)?;
     d.set_item("time", s.time)?;
     d.set_item("collisions", s.collisions)?;
+    d.set_item("contact_events", s.contact_events)?;
     d.set_item("moving_collisions", s.moving_collisions)?;
     d.set_item("mover_steps", s.mover_steps)?;
     d.set_item("contact_steps", s.contact_steps)?;

@@ -199,7 +199,10 @@ pub struct EpisodeSummary {
     pub time: Real,
     /// Contact onsets (a contact after a contact-free step).
     pub collisions: u64,
-    /// Contact onsets at which the robot was moving: a point of its footprint faster than
+    /// Contact events: contact onsets after at least [`CONTACT_EVENT_GAP`] without contact (a
+    /// body pushed away and caught again is one event).
+    pub contact_events: u64,
+    /// Contact events that began with the robot moving: a point of its footprint faster than
     /// [`MOVING_CONTACT_SPEED`] at the starts of the step and of the one before (the robot
     /// drove into it; at rest, something else came).
     pub moving_collisions: u64,
@@ -276,6 +279,8 @@ pub struct Episode {
     intervention_sum: Real,
     solve_time_sum: Real,
     in_contact: bool,
+    /// Time of the latest step in contact (−∞ before any).
+    last_contact: Real,
     seed: u64,
     tracker: MoverTracker,
     /// The movers of the latest scan (its body frame) and as the shield takes them now.
@@ -286,6 +291,9 @@ pub struct Episode {
 /// Speed (m/s) of the footprint's fastest point above which a contact onset counts as the
 /// robot's ([`EpisodeSummary::moving_collisions`]).
 pub const MOVING_CONTACT_SPEED: Real = 0.05;
+
+/// Contact-free time (s) that separates two contact events.
+pub const CONTACT_EVENT_GAP: Real = 0.5;
 
 /// Mixes the reset seed into the world's RNG seed, distinct from the site generator's.
 fn world_seed(seed: u64) -> u64 {
@@ -362,6 +370,7 @@ impl Episode {
             intervention_sum: 0.0,
             solve_time_sum: 0.0,
             in_contact: false,
+            last_contact: Real::NEG_INFINITY,
             seed,
             tracker,
             movers_scan: Vec::new(),
@@ -402,6 +411,7 @@ impl Episode {
         self.intervention_sum = 0.0;
         self.solve_time_sum = 0.0;
         self.in_contact = false;
+        self.last_contact = Real::NEG_INFINITY;
         self.last_shield = None;
         self.tracker.reset();
         self.index_scan()?;
@@ -559,7 +569,12 @@ impl Episode {
         s.steps += 1;
         s.time = step.time;
         s.collisions += (contact && !self.in_contact) as u64;
-        s.moving_collisions += (contact && !self.in_contact && speed_before > MOVING_CONTACT_SPEED) as u64;
+        let event = contact && step.time - self.last_contact > CONTACT_EVENT_GAP;
+        s.contact_events += event as u64;
+        s.moving_collisions += (event && speed_before > MOVING_CONTACT_SPEED) as u64;
+        if contact {
+            self.last_contact = step.time;
+        }
         s.mover_steps += (movers > 0) as u64;
         s.contact_steps += contact as u64;
         s.contact_time += cost * self.config.world.dt;

@@ -210,6 +210,13 @@ impl BrakingModel {
     /// [`BrakingModel::sweep_with`] for `command` held `hold` periods (at least one) before
     /// the brake.
     pub fn sweep_held(&self, v0: [f64; 3], command: [f64; 3], hold: usize, path: &mut Vec<[f64; 2]>) -> Sweep {
+        self.sweep_steered(v0, hold, path, |_| command)
+    }
+
+    /// [`BrakingModel::sweep_held`] with the command of each held period given by `steer`
+    /// from the heading reached (rad, from the current one).
+    pub fn sweep_steered(&self, v0: [f64; 3], hold: usize, path: &mut Vec<[f64; 2]>, steer: impl Fn(f64) -> [f64; 3]) -> Sweep {
+        let command = steer(0.0);
         let t = &self.tracker;
         let dt = self.dt;
         let gain = t.gain(dt);
@@ -235,7 +242,7 @@ impl BrakingModel {
             th_hi = th_hi.max(th);
             steps += 1;
             let held = steps < hold;
-            v = t.next_velocity(v, if held { command } else { [0.0; 3] }, gain, dt).0;
+            v = t.next_velocity(v, if held { steer(th) } else { [0.0; 3] }, gain, dt).0;
             // once the acceleration limits no longer bind, every component decays by the same
             // factor `1 − gain` per period: the rest of the path is summed in closed form below
             let lagging = !held && (0..2).all(|k| v[k].abs() * gain <= t.a_max[k] * dt) && v[2].abs() * gain <= t.alpha_max * dt;
@@ -312,6 +319,13 @@ impl BrakingModel {
     /// [`BrakingModel::mover_margin`] for `command` held `hold` periods (at least one) before
     /// the brake.
     pub fn mover_margin_held(&self, v0: [f64; 3], command: [f64; 3], hold: usize, movers: &[Mover], accel: f64) -> f64 {
+        self.mover_margin_steered(v0, hold, movers, accel, |_| command)
+    }
+
+    /// [`BrakingModel::mover_margin_held`] with the command of each held period given by
+    /// `steer` from the heading reached (rad, from the current one).
+    pub fn mover_margin_steered(&self, v0: [f64; 3], hold: usize, movers: &[Mover], accel: f64, steer: impl Fn(f64) -> [f64; 3]) -> f64 {
+        let command = steer(0.0);
         if movers.is_empty() {
             return f64::INFINITY;
         }
@@ -346,7 +360,7 @@ impl BrakingModel {
             (s, c) = turned(s, c, turn, th);
             steps += 1;
             check(steps as f64 * dt, x, y, s, c, &v);
-            v = t.next_velocity(v, if steps < hold { command } else { [0.0; 3] }, gain, dt).0;
+            v = t.next_velocity(v, if steps < hold { steer(th) } else { [0.0; 3] }, gain, dt).0;
         }
         worst
     }

@@ -29,11 +29,13 @@ const STALL: f64 = 0.5;
 /// How far ahead (s) a mover's predicted disc is checked against the standing footprint: a
 /// mover reaching it within this time makes the shield weigh the escapes.
 const THREAT_HORIZON: f64 = 2.5;
+/// Turn rate (1/s) per radian between the heading and an escape's direction.
+const ESCAPE_TURN_GAIN: f64 = 3.0;
 /// How long (s) an escape is held in its check before the brake.
 const ESCAPE_HOLD: f64 = 1.0;
-/// The escapes' directions in the body frame (shares of the box): back, to either side, and
-/// back to either side.
-const ESCAPES: [[f64; 2]; 5] = [[-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-0.7, 0.7], [-0.7, -0.7]];
+/// The escapes' directions in the current body frame: ahead, back, to either side, and the
+/// four diagonals.
+const ESCAPES: [[f64; 2]; 8] = [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [0.7, 0.7], [0.7, -0.7], [-0.7, 0.7], [-0.7, -0.7]];
 
 /// What the check decided.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -191,14 +193,21 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
     if !c.movers.is_empty() && model.standing_mover_margin(c.movers, c.mover_accel, THREAT_HORIZON) < keep {
         let hold = (ESCAPE_HOLD / model.dt).ceil().max(1.0) as usize;
         let t = &model.tracker;
-        let cmds: [[f64; 3]; ESCAPES.len()] = std::array::from_fn(|k| {
-            let body = [ESCAPES[k][0] * t.v_max[0], ESCAPES[k][1] * t.v_max[1], 0.0];
-            let w = crate::math::mat_vec(&c.rotation, &body);
-            // within the world-frame box
-            let scale = (0..2).map(|j| if w[j].abs() > c.box_world[j] { c.box_world[j] / w[j].abs() } else { 1.0 }).fold(1.0, f64::min);
-            body.map(|v| v * scale)
+        // an escape runs along a direction fixed in the current frame: the body turns to face
+        // it and drives at the most speed the box allows along it
+        let steer = |d: [f64; 2]| {
+            move |th: f64| {
+                let (s, co) = th.sin_cos();
+                let b = [co * d[0] + s * d[1], -s * d[0] + co * d[1]];
+                let speed = (t.v_max[0] / b[0].abs().max(1e-12)).min(t.v_max[1] / b[1].abs().max(1e-12));
+                [b[0] * speed, b[1] * speed, (ESCAPE_TURN_GAIN * b[1].atan2(b[0])).clamp(-t.w_max, t.w_max)]
+            }
+        };
+        let dirs: [[f64; 2]; ESCAPES.len()] = std::array::from_fn(|k| {
+            let n = ESCAPES[k][0].hypot(ESCAPES[k][1]);
+            [ESCAPES[k][0] / n, ESCAPES[k][1] / n]
         });
-        let sweeps: [Sweep; ESCAPES.len()] = std::array::from_fn(|k| model.sweep_held(c.v0, cmds[k], hold, path));
+        let sweeps: [Sweep; ESCAPES.len()] = std::array::from_fn(|k| model.sweep_steered(c.v0, hold, path, steer(dirs[k])));
         let (raw, _) = if c.all_far { ([f64::MAX; ESCAPES.len()], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
         let meets = |world: &[f64; 3]| {
             (0..extra.map_or(0, |e| e.len())).all(|k| {
@@ -206,15 +215,22 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
                 a.iter().zip(world).map(|(a, u)| a * u).sum::<f64>() >= b - 1e-9 * (1.0 + b.abs())
             })
         };
+        // the first period's command as sent, within the world-frame box
+        let sent = |k: usize| {
+            let first = steer(dirs[k])(0.0);
+            let w = crate::math::mat_vec(&c.rotation, &[first[0], first[1], 0.0]);
+            let scale = (0..2).map(|j| if w[j].abs() > c.box_world[j] { c.box_world[j] / w[j].abs() } else { 1.0 }).fold(1.0, f64::min);
+            [w[0] * scale, w[1] * scale, first[2]]
+        };
         let best = (0..ESCAPES.len())
             .filter(|&k| if within { raw[k] >= clearance - ROUNDING && sweeps[k].growth <= TOLERANCE && !toward_held(&sweeps[k]) } else { raw[k] - sweeps[k].growth >= keep })
-            .map(|k| (k, model.mover_margin_held(c.v0, cmds[k], hold, c.movers, c.mover_accel)))
+            .map(|k| (k, model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k]))))
             .filter(|&(_, m)| m >= keep)
-            .map(|(k, m)| (k, m, crate::math::mat_vec(&c.rotation, &cmds[k])))
+            .map(|(k, m)| (k, m, sent(k)))
             .filter(|(_, _, w)| meets(w))
             .max_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((_, _, w)) = best {
-            chosen = Some(([w[0], w[1], 0.0], false));
+            chosen = Some((w, false));
             escaping = true;
         }
     }

@@ -31,5 +31,5 @@ pub use moving::{MovingObstacle, Trajectory, TIME_LIMIT};
 pub use odometry::{OdometryConfig, OdometryFault};
 pub use preset::{preset, PRESET_NAMES};
 pub use rosmap::{load_ros_map, RosMap, RosMapOptions};
-pub use scenario::{Scenario, COORDINATE_LIMIT, YAW_LIMIT};
+pub use scenario::{Chaser, Scenario, COORDINATE_LIMIT, MAX_CHASE_SPEED, YAW_LIMIT};
 pub use traverse::{footprint_reachability, Footprint, Reachability};

@@ -19,7 +19,8 @@
 //! ```
 //! Lengths in metres, angles in radians, times in seconds; `polygons`, `goal`, `obstacles` and
 //! `odometry` may be left out; unknown keys are errors. Instead of `trajectory` an obstacle may
-//! `walk`: `{"waypoints": [[x, y], ...], "speed": 1.2, "start_time": 0.0}` (a pedestrian at
+//! `chase`: `{"start": [x, y], "speed": 1.0, "start_time": 0.0}` (it steers at the robot,
+//! see [`Chaser`]), or `walk`: `{"waypoints": [[x, y], ...], "speed": 1.2, "start_time": 0.0}` (a pedestrian at
 //! 1–1.5 m/s, facing where it goes).
 
 use std::path::Path;
@@ -39,6 +40,23 @@ pub const COORDINATE_LIMIT: Real = 1.0e5;
 /// The largest yaw (rad) of a scenario's poses and odometry yaw jumps.
 pub const YAW_LIMIT: Real = 1.0e4;
 
+/// The fastest chaser (m/s).
+pub const MAX_CHASE_SPEED: Real = 10.0;
+
+/// An obstacle that steers at the robot: each control period it moves straight toward the
+/// robot's true position at `speed` (from `start_time` on), keeping its heading. It stands
+/// for an adversary in the red team (`"chase": {"start": [x, y], "speed": 1.0}` in a file).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Chaser {
+    /// Index into [`Scenario::obstacles`].
+    pub obstacle: usize,
+    /// Speed (m/s).
+    pub speed: Real,
+    /// When it starts (s).
+    pub start_time: Real,
+}
+
 /// Everything that defines an episode's world before any command is given.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scenario {
@@ -52,6 +70,9 @@ pub struct Scenario {
     pub goal: Option<Pose2>,
     /// Scripted moving obstacles.
     pub obstacles: Vec<MovingObstacle>,
+    /// Obstacles that steer at the robot instead of following their trajectory.
+    #[serde(default)]
+    pub chasers: Vec<Chaser>,
     /// Odometry drift and faults.
     pub odometry: OdometryConfig,
 }
@@ -79,6 +100,16 @@ struct ObstacleFile {
     shape: Polygon,
     trajectory: Option<Trajectory>,
     walk: Option<WalkFile>,
+    chase: Option<ChaseFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ChaseFile {
+    start: [Real; 2],
+    speed: Real,
+    #[serde(default)]
+    start_time: Real,
 }
 
 #[derive(Deserialize)]
@@ -93,7 +124,7 @@ struct WalkFile {
 impl Scenario {
     /// A scenario with only a static map and a start pose.
     pub fn new(name: impl Into<String>, map: StaticMap, start: Pose2) -> Self {
-        Self { name: name.into(), map, start, goal: None, obstacles: Vec::new(), odometry: OdometryConfig::default() }
+        Self { name: name.into(), map, start, goal: None, obstacles: Vec::new(), chasers: Vec::new(), odometry: OdometryConfig::default() }
     }
 
     /// Checks every part; the error names the part at fault. Coordinates must lie within
@@ -130,6 +161,15 @@ impl Scenario {
             }
             Ok(())
         };
+        for c in &self.chasers {
+            if c.obstacle >= self.obstacles.len() {
+                return Err(Error::invalid("chase", format!("obstacle {} does not exist ({} obstacles)", c.obstacle, self.obstacles.len())));
+            }
+            if !(c.speed.is_finite() && c.speed > 0.0 && c.speed <= MAX_CHASE_SPEED) {
+                return Err(Error::invalid("chase.speed", format!("must be in (0, {MAX_CHASE_SPEED}] m/s, got {}", c.speed)));
+            }
+            time(c.start_time, "chase.start_time")?;
+        }
         for o in &self.obstacles {
             o.validate()?;
             if let Some(v) = o.shape.vertices.iter().find(|&&v| far(v)) {
@@ -183,16 +223,21 @@ impl Scenario {
             map.add_polygon(p).map_err(|e| Error::map_file(path, format!("polygons[{i}]"), e.to_string()))?;
         }
         let mut obstacles = Vec::with_capacity(f.obstacles.len());
+        let mut chasers = Vec::new();
         for (i, o) in f.obstacles.into_iter().enumerate() {
             let at = format!("obstacles[{i}]");
-            let trajectory = match (o.trajectory, o.walk) {
-                (Some(t), None) => t,
-                (None, Some(w)) => Trajectory::walk(&w.waypoints, w.speed, w.start_time).map_err(|e| Error::map_file(path, format!("{at}.walk"), e.to_string()))?,
-                _ => return Err(Error::map_file(path, at, "give exactly one of `trajectory` and `walk`")),
+            let trajectory = match (o.trajectory, o.walk, o.chase) {
+                (Some(t), None, None) => t,
+                (None, Some(w), None) => Trajectory::walk(&w.waypoints, w.speed, w.start_time).map_err(|e| Error::map_file(path, format!("{at}.walk"), e.to_string()))?,
+                (None, None, Some(c)) => {
+                    chasers.push(Chaser { obstacle: i, speed: c.speed, start_time: c.start_time });
+                    Trajectory::fixed(Pose2::new(c.start[0], c.start[1], 0.0))
+                }
+                _ => return Err(Error::map_file(path, at, "give exactly one of `trajectory`, `walk` and `chase`")),
             };
             obstacles.push(MovingObstacle { name: o.name, shape: o.shape, trajectory });
         }
-        let sc = Scenario { name: f.name.unwrap_or_else(|| "scenario".into()), map, start: f.start, goal: f.goal, obstacles, odometry: f.odometry };
+        let sc = Scenario { name: f.name.unwrap_or_else(|| "scenario".into()), map, start: f.start, goal: f.goal, obstacles, chasers, odometry: f.odometry };
         sc.start.validate("start").map_err(|e| Error::map_file(path, "start", e.to_string()))?;
         for (i, o) in sc.obstacles.iter().enumerate() {
             o.validate().map_err(|e| Error::map_file(path, format!("obstacles[{i}]"), e.to_string()))?;
