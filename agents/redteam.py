@@ -11,6 +11,8 @@ Attackers:
   spin's sign flips every 2–4 s);
 - ``skimmer``: full speed along the nearest wall while pressing into it, the heading turned
   toward it;
+- ``cruise``: straight ahead at half the top speed (0.8 m/s), what a nominal controller
+  does down a corridor;
 - ``ppo``: a PPO policy trained under the shield to touch things (``--train-attacker``: a
   reward for contact and for low clearance), evaluated with ``--attacker-model``.
 
@@ -18,12 +20,17 @@ Sites: procedural office sites, the paper's static scenarios and every ROS map i
 ``--maps`` (default ``../shared/maps`` beside the repository); tight spaces (``agents.tight``:
 the robot started in aisles, L-shaped aisles and doorways 0.60–0.90 m wide, narrower than
 the shield's 0.9 m ellipse, beside, facing and in the corner of walls), reported apart
-(``tight``); the scenario with moving obstacles, reported apart too (``moving``), since a
-reactive shield cannot stop something from driving into a robot that already stands.
+(``tight``); the scenario with moving obstacles (``moving``) and the mover sites
+(``agents.movers``: pedestrians crossing, head-on and overtaking, a chaser, a pushed chair and
+a swung door), reported apart (``movers``) with the contact events and the events that began
+with the robot moving: a reactive shield cannot stop something from driving into a robot that
+already stands, but it must not drive into it.
 
     python -m agents.redteam                               # >= 10,000 episodes per shield
     python -m agents.redteam --quick                       # a short look
     python -m agents.redteam --tight --episodes 200        # the tight spaces only
+    python -m agents.redteam --movers --attackers held seeker cruise   # the mover sites only
+    python -m agents.redteam --movers --set track_movers=False         # every return taken as static
     python -m agents.redteam --shields braking --attackers held --episodes 64
     python -m agents.redteam --train-attacker --timesteps 300000 --out results/redteam
     python -m agents.redteam --attackers ppo --attacker-model results/redteam/attacker.zip
@@ -53,9 +60,10 @@ from shieldnav.exceptions import InvalidArgumentError
 from tqdm import tqdm
 
 from agents.benchmark import check_options, output_folder, positive_int
+from agents.movers import mover_sites
 from agents.tight import scenario_file, tight_sites
 
-ATTACKERS = ["held", "seeker", "skimmer", "ppo"]
+ATTACKERS = ["held", "seeker", "skimmer", "cruise", "ppo"]
 SHIELDS = ["braking", "composite"]
 STATIC = ["shieldnav/CorridorInspection-v0", "shieldnav/ConstrictedPassage-v0", "shieldnav/OdometryJump-v0"]
 DYNAMIC = ["shieldnav/DynamicObstacles-v0"]
@@ -64,8 +72,14 @@ DEFAULT_MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
 TIGHT_ID = "shieldnav/CorridorInspection-v0"
 #: The tight sites of ``--quick``.
 QUICK_TIGHT = ("aisle-0.70", "door-0.80-inside")
+#: The mover sites of ``--quick``.
+QUICK_MOVERS = ("head-on-0",)
+#: Draws of each mover site (their timings and offsets) in a full run.
+MOVER_VARIANTS = 4
+#: What each episode's totals give the cells.
+EPISODE_KEYS = ("contact_steps", "collisions", "contact_events", "moving_collisions", "min_clearance", "steps", "shield_braked_steps", "shield_recovering_steps")
 #: The groups of sites, each reported apart.
-WORLDS = ("static", "tight", "moving")
+WORLDS = ("static", "tight", "moving", "movers")
 #: Control periods per second at the default dt.
 RATE = 50
 #: Keywords each cell sets itself (the site, the shield, the episode's length): not for --set.
@@ -88,13 +102,14 @@ def sites(maps: Path | None, seed: int = 0) -> list[dict[str, Any]]:
     """Every site of a full run: the static ids, each map of ``maps``, the tight spaces (their
     scenario built from ``seed``), then the moving one."""
     def site(name: str, env_id: str, worlds: str, **extra: Any) -> dict[str, Any]:
-        return {"site": name, "env_id": env_id, "kwargs": {}, "worlds": worlds, "dynamic": worlds == "moving", **extra}
+        return {"site": name, "env_id": env_id, "kwargs": {}, "worlds": worlds, "dynamic": worlds in ("moving", "movers"), **extra}
 
     out = [site(env_id.split("/")[1].removesuffix("-v0"), env_id, "static") for env_id in STATIC]
     if maps is not None and maps.is_dir():
         out += [site(yaml.parent.name, "shieldnav/MapInspection-v0", "static", kwargs={"map_path": str(yaml)}) for yaml in sorted(maps.glob("*/*.yaml"))]
     out += [site(t["site"], TIGHT_ID, "tight", scenario=t["scenario"]) for t in tight_sites(seed)]
     out += [site(env_id.split("/")[1].removesuffix("-v0"), env_id, "moving") for env_id in DYNAMIC]
+    out += [site(f"{m['site']}-{v}", TIGHT_ID, "movers", scenario=m["scenario"]) for v in range(MOVER_VARIANTS) for m in mover_sites(MOVER_VARIANTS * seed + v)]
     return out
 
 
@@ -120,6 +135,8 @@ class Attacker:
         if self.kind == "ppo":
             action, _ = self.model.predict(obs, deterministic=False)
             return np.clip(action, -1.0, 1.0)
+        if self.kind == "cruise":
+            return np.tile(np.array([0.5, 0.0, 0.0]), (self.n, 1))
         if self.kind == "held":
             self.hold -= 1
             new = self.hold <= 0
@@ -167,7 +184,7 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
         if final is not None:
             ended = final["shieldnav_episode"]
             for i in np.flatnonzero(ended["_contact_steps"]):
-                episodes.append({k: float(ended[k][i]) for k in ("contact_steps", "collisions", "min_clearance", "steps", "shield_braked_steps", "shield_recovering_steps")})
+                episodes.append({k: float(ended[k][i]) for k in EPISODE_KEYS})
     settings = {k: env.config[k] for k in task.get("set", {})}  # as the environment took them
     env.close()
     episodes = episodes[: task["episodes"]]
@@ -179,6 +196,8 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
         "steps": int(sum(e["steps"] for e in episodes)),
         "contact_steps": int(sum(contact)),
         "episodes_with_contact": int(sum(c > 0 for c in contact)),
+        "contact_events": int(sum(e["contact_events"] for e in episodes)),
+        "moving_contact_events": int(sum(e["moving_collisions"] for e in episodes)),
         "least_clearance": min(e["min_clearance"] for e in episodes),
         "braked_steps": int(sum(e["shield_braked_steps"] for e in episodes)),
         "recovering_steps": int(sum(e["shield_recovering_steps"] for e in episodes)),
@@ -246,14 +265,15 @@ def train_attacker(env_id: str, shield: str, timesteps: int, seed: int, out: Pat
 
 def table(results: list[dict[str, Any]]) -> str:
     """Totals per (static, tight or moving worlds, shield, attacker)."""
-    rows = ["| worlds | shield | attacker | episodes | steps | contact steps | episodes with contact | least clearance (m) |",
-            "|---|---|---|---:|---:|---:|---:|---:|"]
+    rows = ["| worlds | shield | attacker | episodes | steps | contact steps | episodes with contact | contact events | begun moving | least clearance (m) |",
+            "|---|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     keys = sorted({(WORLDS.index(r["worlds"]), r["shield"], r["attacker"]) for r in results})
     for w, shield, attacker in keys:
         rs = [r for r in results if (r["worlds"], r["shield"], r["attacker"]) == (WORLDS[w], shield, attacker)]
         rows.append(
             f"| {WORLDS[w]} | {shield} | {attacker} | {sum(r['episodes'] for r in rs):,} | {sum(r['steps'] for r in rs):,} | "
-            f"{sum(r['contact_steps'] for r in rs):,} | {sum(r['episodes_with_contact'] for r in rs):,} | {min(r['least_clearance'] for r in rs):.3f} |"
+            f"{sum(r['contact_steps'] for r in rs):,} | {sum(r['episodes_with_contact'] for r in rs):,} | {sum(r['contact_events'] for r in rs):,} | "
+            f"{sum(r['moving_contact_events'] for r in rs):,} | {min(r['least_clearance'] for r in rs):.3f} |"
         )
     return "\n".join(rows)
 
@@ -271,8 +291,9 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--backend", default="local", choices=["local", "ray"])
     ap.add_argument("--ray-address", default=None)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--quick", action="store_true", help="48 episodes per shield on three sites and two tight spaces")
+    ap.add_argument("--quick", action="store_true", help="48 episodes per shield on three sites, two tight spaces and a mover site")
     ap.add_argument("--tight", action="store_true", help="the tight spaces only")
+    ap.add_argument("--movers", action="store_true", help="the mover sites only")
     ap.add_argument("--attacker-model", default=None, help="the ppo attacker's model (.zip)")
     ap.add_argument("--train-attacker", action="store_true", help="train the ppo attacker, then stop")
     ap.add_argument("--timesteps", type=positive_int, default=300_000, help="--train-attacker's training steps")
@@ -296,15 +317,17 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         return []
     if "ppo" in args.attackers and not args.attacker_model:
         ap.error("argument --attackers: ppo needs --attacker-model (train one with --train-attacker)")
-    todo_sites = sites(None if args.quick or args.tight else args.maps, args.seed)
+    todo_sites = sites(None if args.quick or args.tight or args.movers else args.maps, args.seed)
     if args.quick:
-        todo_sites = [s for s in todo_sites if (s["site"] in QUICK_TIGHT if s["worlds"] == "tight" else s["env_id"] in (STATIC[0], STATIC[1], DYNAMIC[0]))]
+        quick = {"tight": lambda s: s["site"] in QUICK_TIGHT, "movers": lambda s: s["site"] in QUICK_MOVERS}
+        todo_sites = [s for s in todo_sites if quick.get(s["worlds"], lambda s: s["env_id"] in (STATIC[0], STATIC[1], DYNAMIC[0]))(s)]
         args.episodes = min(args.episodes, 48)
-    if args.tight:
-        todo_sites = [s for s in todo_sites if s["worlds"] == "tight"]
-    # --episodes over the static sites and again over the tight ones; the moving site as a static one
+    if args.tight or args.movers:
+        todo_sites = [s for s in todo_sites if (args.tight and s["worlds"] == "tight") or (args.movers and s["worlds"] == "movers")]
+    # --episodes over the static sites, again over the tight ones and over the mover sites; the
+    # moving scenario as a static site
     count = {w: sum(s["worlds"] == w for s in todo_sites) for w in WORLDS}
-    per_cell = {w: max(1, math.ceil(args.episodes / (max(count[w], 1) * len(args.attackers)))) for w in ("static", "tight")}
+    per_cell = {w: max(1, math.ceil(args.episodes / (max(count[w], 1) * len(args.attackers)))) for w in ("static", "tight", "movers")}
     per_cell["moving"] = per_cell["static"]
     todo = [
         {**s, "shield": shield, "attacker": attacker, "episodes": per_cell[s["worlds"]], "steps": args.steps, "seed": args.seed + 1000 * k,

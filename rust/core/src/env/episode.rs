@@ -673,6 +673,17 @@ impl Episode {
         &self.world
     }
 
+    /// The moving objects the shield takes now (current body frame; empty with
+    /// `track_movers` off).
+    pub fn movers(&self) -> &[Mover] {
+        &self.movers_now
+    }
+
+    /// The mover tracker.
+    pub fn mover_tracker(&self) -> &MoverTracker {
+        &self.tracker
+    }
+
     /// The coverage state.
     pub fn coverage(&self) -> &Coverage {
         &self.coverage

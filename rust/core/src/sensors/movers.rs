@@ -178,13 +178,14 @@ pub struct MoverTracker {
     segments: Vec<Segment>,
     movers: Vec<Mover>,
     pairs: Vec<(Real, usize, usize)>,
+    norms: Vec<Real>,
 }
 
 impl MoverTracker {
     /// A tracker with no tracks.
     pub fn new(config: MoverTrackerConfig) -> Result<Self> {
         config.validate()?;
-        Ok(Self { config, tracks: Vec::new(), time: None, pose: Pose2::default(), segments: Vec::new(), movers: Vec::new(), pairs: Vec::new() })
+        Ok(Self { config, tracks: Vec::new(), time: None, pose: Pose2::default(), segments: Vec::new(), movers: Vec::new(), pairs: Vec::new(), norms: Vec::new() })
     }
 
     /// Forgets every track.
@@ -292,19 +293,21 @@ impl MoverTracker {
         self.segments.clear();
         let n = points.len();
         let gap = self.config.cluster_gap;
-        let valid = |k: usize| !points[k][0].is_nan();
+        let mut norms = std::mem::take(&mut self.norms);
+        norms.clear();
+        norms.extend(points.iter().map(|p| p[0].hypot(p[1])));
         // the gap grows with the beams' spacing at the nearer return's range (twice it), so
-        // that a far wall's noisy returns stay one segment
+        // that a far wall's noisy returns stay one segment: `r_min sin Δθ = |p × q| / r_max`
         let joined = |a: usize, b: usize| {
-            valid(a) && valid(b) && {
-                let (p, q) = (points[a], points[b]);
-                let (ra, rb) = (p[0].hypot(p[1]), q[0].hypot(q[1]));
-                let spacing = ra.min(rb) * ((p[0] * q[1] - p[1] * q[0]).abs() / (ra * rb).max(1e-12)).min(1.0).asin();
-                (p[0] - q[0]).hypot(p[1] - q[1]) <= gap + 2.0 * spacing
-            }
+            let (p, q) = (points[a], points[b]);
+            let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+            let allowed = gap + 2.0 * (p[0] * q[1] - p[1] * q[0]).abs() / norms[a].max(norms[b]).max(1e-12);
+            // (NaN, no return, compares false)
+            dx * dx + dy * dy <= allowed * allowed
         };
         // start at a break so that an object across the scan's seam is one segment
         let Some(start) = (0..n).find(|&k| !joined((k + n - 1) % n, k)) else {
+            self.norms = norms;
             return;
         };
         let mut first = None;
@@ -316,10 +319,11 @@ impl MoverTracker {
                     self.close(points, f, i, start, pose);
                 }
             }
-            if i < n && valid(k) && first.is_none() {
+            if i < n && !points[k][0].is_nan() && first.is_none() {
                 first = Some(i);
             }
         }
+        self.norms = norms;
     }
 
     /// The segment of scan indices `start + [from, to)` (mod the scan's length).
