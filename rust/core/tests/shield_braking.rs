@@ -143,3 +143,33 @@ fn within_the_margin_at_a_corner_the_body_does_not_move_toward_either_edge() {
     let out = sh.filter(&Scan::new_f64(&pts, 2).unwrap(), &st, &[1.0, 0.8]).unwrap();
     assert!(out.u[0] > 0.0 && out.u[1] > 0.0, "{:?}", out.u);
 }
+
+/// With the odometry's velocity (`odometry_velocity`): a full-speed approach to a wall while
+/// the odometry freezes (it reads the robot at rest) and through the OdometryJump scenario's
+/// 100 m jump, at the limits, still stops short of the walls; the frozen readings are not
+/// believed.
+#[test]
+fn the_odometrys_velocity_is_checked_against_the_model() {
+    use shieldnav_core::world::OdometryFault;
+    let Site::Scenario(mut s) = corridor(3.0, 6.0, Pose2::new(0.0, 0.0, 0.0)) else { unreachable!() };
+    s.odometry.faults.push(OdometryFault::Freeze { start: 0.5, end: 30.0 });
+    let site = Site::Scenario(s);
+    let config = EpisodeConfig { odometry_velocity: true, ..config(ShieldMethod::Braking) };
+    let mut ep = Episode::new(site, config.clone(), 0).unwrap();
+    for _ in 0..400 {
+        ep.step([1.0, 0.0, 0.0]).unwrap();
+    }
+    let frozen = *ep.summary();
+    assert_eq!(frozen.contact_steps, 0, "{frozen:?}");
+    assert!(frozen.odometry_distrusted_steps > 0 && frozen.path_length > 4.0, "{frozen:?}");
+    for action in [[1.0, 0.0, 0.0], [1.0, 1.0, 1.0], [-1.0, -1.0, 1.0]] {
+        let mut ep = Episode::new(Site::Preset("odometry_jump".into()), config.clone(), 0).unwrap();
+        for k in 0..1500 {
+            let a = if k % 100 < 50 { action } else { action.map(|v| -v) };
+            ep.step(a).unwrap();
+        }
+        let s = *ep.summary();
+        assert_eq!(s.contact_steps, 0, "{action:?}: {s:?}");
+        assert!(s.odometry_distrusted_steps >= 1, "the jump was believed: {s:?}");
+    }
+}

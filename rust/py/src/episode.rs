@@ -76,6 +76,7 @@ pub fn summary_dict<'py>(py: Python<'py>, s: &EpisodeSummary) -> PyResult<Bound<
     d.set_item("contact_events", s.contact_events)?;
     d.set_item("moving_collisions", s.moving_collisions)?;
     d.set_item("mover_steps", s.mover_steps)?;
+    d.set_item("odometry_distrusted_steps", s.odometry_distrusted_steps)?;
     d.set_item("contact_steps", s.contact_steps)?;
     d.set_item("contact_time", s.contact_time)?;
     d.set_item("deadlock", s.deadlock)?;

@@ -84,6 +84,10 @@ pub struct EpisodeConfig {
     pub track_movers: bool,
     /// The mover tracker's parameters.
     pub movers: MoverTrackerConfig,
+    /// The braking shield reads the body's velocity from the odometry (the estimate's change
+    /// over the step, checked against what the tracker model predicts from the commands sent;
+    /// see [`Episode::shield_velocity`]) instead of the simulator's.
+    pub odometry_velocity: bool,
 }
 
 impl Default for EpisodeConfig {
@@ -108,6 +112,7 @@ impl Default for EpisodeConfig {
             footprint: None,
             track_movers: true,
             movers: MoverTrackerConfig::default(),
+            odometry_velocity: false,
         }
     }
 }
@@ -208,6 +213,9 @@ pub struct EpisodeSummary {
     pub moving_collisions: u64,
     /// Steps at which the shield was given at least one moving object.
     pub mover_steps: u64,
+    /// Steps at which the odometry's velocity disagreed with the tracker model's prediction
+    /// beyond [`ODOMETRY_TRUST`] and the shield took the model's (`odometry_velocity`).
+    pub odometry_distrusted_steps: u64,
     /// Steps in contact.
     pub contact_steps: u64,
     /// Time in contact (s).
@@ -272,6 +280,8 @@ pub struct Episode {
     velocity: [Real; 3],
     /// The body's velocity a step before `velocity`.
     previous_velocity: [Real; 3],
+    /// The velocity the shield took last step (`odometry_velocity`).
+    believed: [Real; 3],
     last_command: [Real; 3],
     last: StepReport,
     last_shield: Option<ShieldOutcome>,
@@ -294,6 +304,12 @@ pub const MOVING_CONTACT_SPEED: Real = 0.05;
 
 /// Contact-free time (s) that separates two contact events.
 pub const CONTACT_EVENT_GAP: Real = 0.5;
+
+/// How far (m/s) the odometry's velocity may lie from the tracker model's prediction and still
+/// be taken; beyond it (a jump, a freeze, a slip) the model's is.
+pub const ODOMETRY_TRUST: Real = 0.25;
+/// The velocity error (m/s) the braking check allows for when the odometry is not taken.
+pub const ODOMETRY_DISTRUST_ERROR: Real = 0.25;
 
 /// Mixes the reset seed into the world's RNG seed, distinct from the site generator's.
 fn world_seed(seed: u64) -> u64 {
@@ -363,6 +379,7 @@ impl Episode {
             estimate_change: Pose2::default(),
             velocity: [0.0; 3],
             previous_velocity: [0.0; 3],
+            believed: [0.0; 3],
             last_command: [0.0; 3],
             last: StepReport::default(),
             last_shield: None,
@@ -406,6 +423,7 @@ impl Episode {
         self.estimate_change = Pose2::default();
         self.velocity = [0.0; 3];
         self.previous_velocity = [0.0; 3];
+        self.believed = [0.0; 3];
         self.last_command = [0.0; 3];
         self.summary = EpisodeSummary { min_clearance: Real::INFINITY, min_h: Real::INFINITY, deadlock_time: Real::NAN, ..Default::default() };
         self.intervention_sum = 0.0;
@@ -473,6 +491,31 @@ impl Episode {
         self.near.truncate(k);
     }
 
+    /// The velocity the shield takes, a bound on its error (m/s), and whether the odometry was
+    /// distrusted. The simulator's body velocity, exact; with `odometry_velocity`, the
+    /// odometry estimate's change over the last step (body frame, per second) where it lies
+    /// within [`ODOMETRY_TRUST`] of what the tracker model predicts from the velocity taken
+    /// last step and the command sent (their distance is the error bound), else the model's
+    /// prediction with [`ODOMETRY_DISTRUST_ERROR`]: a frozen odometry (zero while the body
+    /// moves) or a jump is not believed.
+    fn shield_velocity(&self) -> ([Real; 3], Real, bool) {
+        if !self.config.odometry_velocity {
+            return (self.velocity, 0.0, false);
+        }
+        let dt = self.config.world.dt;
+        let c = self.estimate_change;
+        let odo = [c.x / dt, c.y / dt, c.yaw / dt];
+        let t = &self.config.world.tracker;
+        let model = t.next_velocity(self.believed, self.last_command, t.gain(dt), dt).0;
+        let error = (odo[0] - model[0]).hypot(odo[1] - model[1]);
+        let turn = (odo[2] - model[2]).abs();
+        if error <= ODOMETRY_TRUST && turn <= 2.0 * ODOMETRY_TRUST && odo.iter().all(|v| v.is_finite()) {
+            (odo, error, false)
+        } else {
+            (model, ODOMETRY_DISTRUST_ERROR, true)
+        }
+    }
+
     /// The motion that takes the kept returns (scan frame) into the current body frame; the
     /// shield applies it in its kernel.
     fn compensate_points(&mut self) {
@@ -502,7 +545,9 @@ impl Episode {
         // become a contact moves the body one step early)
         let speed = |v: &[Real; 3]| v[0].hypot(v[1]) + r * v[2].abs();
         let speed_before = speed(&self.velocity).min(speed(&self.previous_velocity));
-        let state = BodyState::planar(0.0, omega)?.with_velocity(self.velocity)?;
+        let (v_shield, v_error, distrusted) = self.shield_velocity();
+        self.believed = v_shield;
+        let state = BodyState::planar(0.0, omega)?.with_velocity(v_shield)?.with_velocity_error(v_error)?;
         let out = self.shield.filter(&scan, &state, &u_nom[..2])?;
         let u = if self.config.shield.method == ShieldMethod::Braking {
             // every command of the braking shield passed its braking check (the brake included)
@@ -576,6 +621,7 @@ impl Episode {
             self.last_contact = step.time;
         }
         s.mover_steps += (movers > 0) as u64;
+        s.odometry_distrusted_steps += distrusted as u64;
         s.contact_steps += contact as u64;
         s.contact_time += cost * self.config.world.dt;
         if deadlock && !s.deadlock {

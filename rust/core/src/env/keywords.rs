@@ -208,6 +208,7 @@ macro_rules! each_field {
         $f!("footprint", footprint);
         $f!("mover_accel", shield.mover_accel);
         $f!("track_movers", track_movers);
+        $f!("odometry_velocity", odometry_velocity);
         $f!("mover_min_speed", movers.min_speed);
         $f!("mover_max_size", movers.max_size);
         $f!("mover_max_range", movers.max_range);

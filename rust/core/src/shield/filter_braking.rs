@@ -307,7 +307,7 @@ impl Shield {
                 }
             };
             let c = self.candidates(&b, state, u_nom, &sol, v0, nominal, scan.movers());
-            decision = self.check(scan, &c, extra);
+            decision = self.check(scan, &c, extra, state.velocity_error);
             match decision.command {
                 Some(cmd) => {
                     let changed = (0..3).any(|k| cmd[k] != sol.u[k]);
@@ -396,8 +396,16 @@ impl Shield {
     }
 
     /// The check over the points the composite used.
-    fn check(&mut self, scan: &Scan, c: &Candidates<'_>, extra: Option<&LinearConstraints>) -> Decision {
-        let model = self.config.braking;
+    fn check(&mut self, scan: &Scan, c: &Candidates<'_>, extra: Option<&LinearConstraints>, velocity_error: f64) -> Decision {
+        let mut model = self.config.braking;
+        if velocity_error > 0.0 {
+            // a velocity off by e brakes to a stop within e (|v₀| + e)/a + e (3τ + dt) of the
+            // replay's (the acceleration-limited stop's extra distance plus the lag's): kept as
+            // more clearance
+            let t = &model.tracker;
+            let speed = c.v0[0].hypot(c.v0[1]);
+            model.brake_margin += velocity_error * ((speed + velocity_error) / t.a_max[0].min(t.a_max[1]) + 3.0 * t.tau + model.dt);
+        }
         let mut path = std::mem::take(&mut self.brake_path);
         let level = self.level;
         let out = if self.config.scan.downsamples() {

@@ -13,6 +13,7 @@ pub struct BodyState {
     pub(super) omega: Vec3,
     pub(super) planar: bool,
     pub(super) velocity: Option<Vec3>,
+    pub(super) velocity_error: f64,
 }
 
 /// The largest angular velocity (rad/s) and speed (m/s) a body state may give: far beyond any
@@ -34,7 +35,7 @@ impl BodyState {
     pub fn planar(yaw: f64, yaw_rate: f64) -> Result<Self> {
         finite("yaw", &[yaw])?;
         body_rate("omega", &[yaw_rate])?;
-        Ok(Self { rotation: rot_z(yaw), omega: [0.0, 0.0, yaw_rate], planar: true, velocity: None })
+        Ok(Self { rotation: rot_z(yaw), omega: [0.0, 0.0, yaw_rate], planar: true, velocity: None, velocity_error: 0.0 })
     }
 
     /// The same state with the body's measured velocity `(v_x, v_y, ω)` (body frame, m/s and
@@ -42,6 +43,20 @@ impl BodyState {
     pub fn with_velocity(self, velocity: Vec3) -> Result<Self> {
         body_rate("velocity", &velocity)?;
         Ok(Self { velocity: Some(velocity), ..self })
+    }
+
+    /// The same state with a bound (m/s) on the measured velocity's error (an odometry's
+    /// velocity, say): the braking check keeps that error times the time to stop more.
+    pub fn with_velocity_error(self, error: f64) -> Result<Self> {
+        if !(error.is_finite() && (0.0..=MAX_BODY_RATE).contains(&error)) {
+            return Err(Error::invalid("velocity_error", format!("must be from 0 to {MAX_BODY_RATE} m/s, got {error}")));
+        }
+        Ok(Self { velocity_error: error, ..self })
+    }
+
+    /// The bound on the measured velocity's error (m/s).
+    pub fn velocity_error(&self) -> f64 {
+        self.velocity_error
     }
 
     /// The measured body velocity, if given.
@@ -57,7 +72,7 @@ impl BodyState {
         if err > ROTATION_TOLERANCE || det(&rotation) < 0.0 {
             return Err(Error::invalid("rotation", format!("not a proper rotation matrix (|RᵀR − I| = {err:.2e}, det = {:.3})", det(&rotation))));
         }
-        Ok(Self { rotation, omega, planar: false, velocity: None })
+        Ok(Self { rotation, omega, planar: false, velocity: None, velocity_error: 0.0 })
     }
 
     /// Body-to-world rotation.
