@@ -209,6 +209,12 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         });
         let sweeps: [Sweep; ESCAPES.len()] = std::array::from_fn(|k| model.sweep_steered(c.v0, hold, path, steer(dirs[k])));
         let (raw, _) = if c.all_far { ([f64::MAX; ESCAPES.len()], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
+        // the first period's command with the brake after it passes too: the next call may
+        // find nothing better than the brake, and braking is safe by induction only from
+        // what was checked with the brake
+        let firsts: [Sweep; ESCAPES.len()] = std::array::from_fn(|k| model.sweep_with(c.v0, steer(dirs[k])(0.0), path));
+        let (raw1, _) = if c.all_far { ([f64::MAX; ESCAPES.len()], 0.0) } else { clearances_of(std::array::from_fn(|k| &firsts[k].planes), &here, whole, None, keep, level) };
+        let static_ok = |sw: &Sweep, raw: f64| if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE && !toward_held(sw) } else { raw - sw.growth >= keep };
         let meets = |world: &[f64; 3]| {
             (0..extra.map_or(0, |e| e.len())).all(|k| {
                 let (a, b) = extra.map_or((&[][..], 0.0), |e| e.row(k));
@@ -223,7 +229,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
             [w[0] * scale, w[1] * scale, first[2]]
         };
         let best = (0..ESCAPES.len())
-            .filter(|&k| if within { raw[k] >= clearance - ROUNDING && sweeps[k].growth <= TOLERANCE && !toward_held(&sweeps[k]) } else { raw[k] - sweeps[k].growth >= keep })
+            .filter(|&k| static_ok(&sweeps[k], raw[k]) && static_ok(&firsts[k], raw1[k]))
             .map(|k| (k, model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k]))))
             .filter(|&(_, m)| m >= keep)
             .map(|(k, m)| (k, m, sent(k)))
