@@ -204,17 +204,12 @@ impl BrakingModel {
     /// [`BrakingModel::sweep`] with the replayed path kept in `path` (cleared first), a buffer
     /// the caller reuses from call to call.
     pub fn sweep_with(&self, v0: [f64; 3], command: [f64; 3], path: &mut Vec<[f64; 2]>) -> Sweep {
-        self.sweep_held(v0, command, 1, path)
+        self.sweep_steered(v0, 1, path, |_| command)
     }
 
-    /// [`BrakingModel::sweep_with`] for `command` held `hold` periods (at least one) before
-    /// the brake.
-    pub fn sweep_held(&self, v0: [f64; 3], command: [f64; 3], hold: usize, path: &mut Vec<[f64; 2]>) -> Sweep {
-        self.sweep_steered(v0, hold, path, |_| command)
-    }
-
-    /// [`BrakingModel::sweep_held`] with the command of each held period given by `steer`
-    /// from the heading reached (rad, from the current one).
+    /// [`BrakingModel::sweep_with`] with the command held `hold` periods (at least one) before
+    /// the brake, each period's given by `steer` from the heading reached (rad, from the
+    /// current one).
     pub fn sweep_steered(&self, v0: [f64; 3], hold: usize, path: &mut Vec<[f64; 2]>, steer: impl Fn(f64) -> [f64; 3]) -> Sweep {
         let command = steer(0.0);
         let t = &self.tracker;
@@ -313,17 +308,12 @@ impl BrakingModel {
     /// [`BrakingModel::clearance`] leaves the robot at rest before any mover that keeps to
     /// those bounds reaches it: passive safety.
     pub fn mover_margin(&self, v0: [f64; 3], command: [f64; 3], movers: &[Mover], accel: f64) -> f64 {
-        self.mover_margin_held(v0, command, 1, movers, accel)
+        self.mover_margin_steered(v0, 1, movers, accel, |_| command)
     }
 
-    /// [`BrakingModel::mover_margin`] for `command` held `hold` periods (at least one) before
-    /// the brake.
-    pub fn mover_margin_held(&self, v0: [f64; 3], command: [f64; 3], hold: usize, movers: &[Mover], accel: f64) -> f64 {
-        self.mover_margin_steered(v0, hold, movers, accel, |_| command)
-    }
-
-    /// [`BrakingModel::mover_margin_held`] with the command of each held period given by
-    /// `steer` from the heading reached (rad, from the current one).
+    /// [`BrakingModel::mover_margin`] with the command held `hold` periods (at least one)
+    /// before the brake, each period's given by `steer` from the heading reached (rad, from
+    /// the current one).
     pub fn mover_margin_steered(&self, v0: [f64; 3], hold: usize, movers: &[Mover], accel: f64, steer: impl Fn(f64) -> [f64; 3]) -> f64 {
         let command = steer(0.0);
         if movers.is_empty() {

@@ -44,8 +44,6 @@ pub(super) struct Decision {
     pub command: Option<[f64; 3]>,
     /// The tight-space candidate (the nominal command at most `tight_speed`) was chosen.
     pub tight: bool,
-    /// An escape from a mover coming at the robot was sent.
-    pub escaping: bool,
     /// The least clearance of the standing footprint (m).
     pub clearance: f64,
     /// The row's full command's swept clearance less the clearance required (m).
@@ -116,9 +114,8 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         let (s, c) = sw.heading.sin_cos();
         model.footprint.edges().enumerate().any(|(j, (n, _))| held >> j & 1 == 1 && (c * n[0] - s * n[1]) * sw.chord[0] + (s * n[0] + c * n[1]) * sw.chord[1] > ROUNDING)
     };
-    let passes = |sw: &Sweep, raw: f64, cmd: &[f64; 3]| {
-        sw.extent + keep <= reach && (if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE && !toward_held(sw) } else { raw - sw.growth >= keep }) && clear_of_movers(cmd)
-    };
+    let static_ok = |sw: &Sweep, raw: f64| if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE && !toward_held(sw) } else { raw - sw.growth >= keep };
+    let passes = |sw: &Sweep, raw: f64, cmd: &[f64; 3]| sw.extent + keep <= reach && static_ok(sw, raw) && clear_of_movers(cmd);
     let sweep_margin = row_raw.min(f64::MAX / 2.0) - row.growth - required;
     let near_set = PointSet { pts: &near[..], stride: 2, motion: None, reach: f64::INFINITY, band: None };
     let largest = |cmd: &[f64; 3], full_passes: bool, path: &mut Vec<[f64; 2]>| -> Option<f64> {
@@ -176,11 +173,7 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
             let tight_world = c.tight_world.map(|v| v * s);
             // the user's rows hold for the tight-space command as sent (a fraction of a
             // command that meets `aᵀu ≥ b` with b > 0 may not)
-            let meets = |k: usize| {
-                let (a, b) = extra.map_or((&[][..], 0.0), |e| e.row(k));
-                a.iter().zip(&tight_world).map(|(a, u)| a * u).sum::<f64>() >= b - 1e-9 * (1.0 + b.abs())
-            };
-            if progress(c, &c.tight, s) > row_progress.max(0.0) + 1e-9 && (0..extra.map_or(0, |e| e.len())).all(meets) {
+            if progress(c, &c.tight, s) > row_progress.max(0.0) + 1e-9 && meets_rows(extra, &tight_world) {
                 chosen = Some((tight_world, true));
             }
         }
@@ -189,7 +182,6 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
     // rest. Each escape is held for ESCAPE_HOLD in its check, then the brake: it passes the
     // static check over every point and keeps the movers' margin while the robot moves; the
     // one keeping the most margin is sent
-    let mut escaping = false;
     if !c.movers.is_empty() && model.standing_mover_margin(c.movers, c.mover_accel, THREAT_HORIZON) < keep {
         let hold = (ESCAPE_HOLD / model.dt).ceil().max(1.0) as usize;
         let t = &model.tracker;
@@ -214,13 +206,6 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         // what was checked with the brake
         let firsts: [Sweep; ESCAPES.len()] = std::array::from_fn(|k| model.sweep_with(c.v0, steer(dirs[k])(0.0), path));
         let (raw1, _) = if c.all_far { ([f64::MAX; ESCAPES.len()], 0.0) } else { clearances_of(std::array::from_fn(|k| &firsts[k].planes), &here, whole, None, keep, level) };
-        let static_ok = |sw: &Sweep, raw: f64| if within { raw >= clearance - ROUNDING && sw.growth <= TOLERANCE && !toward_held(sw) } else { raw - sw.growth >= keep };
-        let meets = |world: &[f64; 3]| {
-            (0..extra.map_or(0, |e| e.len())).all(|k| {
-                let (a, b) = extra.map_or((&[][..], 0.0), |e| e.row(k));
-                a.iter().zip(world).map(|(a, u)| a * u).sum::<f64>() >= b - 1e-9 * (1.0 + b.abs())
-            })
-        };
         // the first period's command as sent, within the world-frame box
         let sent = |k: usize| {
             let first = steer(dirs[k])(0.0);
@@ -233,14 +218,24 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
             .map(|k| (k, model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k]))))
             .filter(|&(_, m)| m >= keep)
             .map(|(k, m)| (k, m, sent(k)))
-            .filter(|(_, _, w)| meets(w))
+            .filter(|(_, _, w)| meets_rows(extra, w))
             .max_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((_, _, w)) = best {
             chosen = Some((w, false));
-            escaping = true;
         }
     }
-    Decision { command: chosen.map(|(cmd, _)| cmd), tight: chosen.is_some_and(|(_, t)| t), escaping, clearance, sweep_margin }
+    Decision { command: chosen.map(|(cmd, _)| cmd), tight: chosen.is_some_and(|(_, t)| t), clearance, sweep_margin }
+}
+
+/// Whether the world-frame command `u` (translation, `ω`) meets the user's rows `aᵀu ≥ b`, up to
+/// their solver's tolerance.
+fn meets_rows(extra: Option<&LinearConstraints>, u: &[f64; 3]) -> bool {
+    extra.is_none_or(|e| {
+        (0..e.len()).all(|k| {
+            let (a, b) = e.row(k);
+            a.iter().zip(u).map(|(a, u)| a * u).sum::<f64>() >= b - 1e-9 * (1.0 + b.abs())
+        })
+    })
 }
 
 /// The footprint's edges (bit `j` for edge `j`) that a point within `keep` of the footprint
@@ -300,7 +295,7 @@ impl Shield {
             sol.u[k] /= w;
         }
         let recovering = b.h_min < 0.0;
-        let mut decision = Decision { command: Some([sol.u[0], sol.u[1], sol.u[2]]), tight: false, escaping: false, clearance: f64::MAX, sweep_margin: f64::NAN };
+        let mut decision = Decision { command: Some([sol.u[0], sol.u[1], sol.u[2]]), tight: false, clearance: f64::MAX, sweep_margin: f64::NAN };
         if dim == 2 && (b.num_points > 0 || !scan.movers().is_empty()) {
             let v0 = *state.velocity.as_ref().ok_or_else(|| Error::invalid("velocity", "the braking shield needs the body's measured velocity (v_x, v_y, ω), body frame"))?;
             // the tight-space command: the nominal one in the box and the user's rows
