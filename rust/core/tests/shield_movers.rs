@@ -86,3 +86,35 @@ fn a_chaser_slower_than_the_robot_never_touches_it_in_open_space() {
         }
     }
 }
+
+/// A walker (2.5 m/s) shoves the unshielded robot, standing still, toward a wall 2.6 m ahead and
+/// stops: the robot, coasting to rest, meets the wall still moving. That contact is the
+/// walker's doing, not one the robot drove into; driving into the same wall from rest is.
+#[test]
+fn a_shove_into_a_wall_is_not_a_contact_begun_moving() {
+    let site = |waypoints: &[[f64; 2]], speed: f64| {
+        let Site::Scenario(mut s) = hall(waypoints, speed) else { unreachable!() };
+        s.map.add_segment(Segment::new([3.0, -3.0], [3.0, 3.0], 0.1)).unwrap();
+        Site::Scenario(s)
+    };
+    let config = EpisodeConfig { shield: shieldnav_core::shield::ShieldConfig { method: shieldnav_core::shield::ShieldMethod::Unfiltered, ..Default::default() }, ..EpisodeConfig::default() };
+    let mut ep = Episode::new(site(&[[-3.0, 0.0], [0.4, 0.0]], 2.5), config.clone(), 0).unwrap();
+    let (mut touching, mut speed_at_wall) = (false, None);
+    for _ in 0..300 {
+        let speed = ep.velocity()[0].hypot(ep.velocity()[1]);
+        let r = ep.step([0.0, 0.0, 0.0]).unwrap();
+        if r.cost > 0.0 && !touching && ep.world().true_pose().x > 1.5 {
+            speed_at_wall.get_or_insert(speed);
+        }
+        touching = r.cost > 0.0;
+    }
+    let shoved = *ep.summary();
+    assert_eq!(shoved.contact_events, 2, "the shove and the wall were expected: {shoved:?}");
+    assert!(speed_at_wall.is_some_and(|v| v > 0.3), "the robot was expected to meet the wall coasting: {speed_at_wall:?}");
+    assert_eq!(shoved.moving_collisions, 0, "{shoved:?}");
+    let mut ep = Episode::new(site(&[[-15.0, 7.0], [-14.0, 7.0]], 0.1), config, 0).unwrap();
+    for _ in 0..200 {
+        ep.step([1.0, 0.0, 0.0]).unwrap();
+    }
+    assert_eq!(ep.summary().moving_collisions, 1, "{:?}", ep.summary());
+}

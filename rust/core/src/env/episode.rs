@@ -207,9 +207,11 @@ pub struct EpisodeSummary {
     /// Contact events: contact onsets after at least [`CONTACT_EVENT_GAP`] without contact (a
     /// body pushed away and caught again is one event).
     pub contact_events: u64,
-    /// Contact events that began with the robot moving: a point of its footprint faster than
-    /// [`MOVING_CONTACT_SPEED`] at the starts of the step and of the one before (the robot
-    /// drove into it; at rest, something else came).
+    /// Contact events that began with the robot moving under its own power: a point of its
+    /// footprint faster than [`MOVING_CONTACT_SPEED`] at the starts of the step and of the one
+    /// before (the robot drove into it; at rest, something else came), and no push since the
+    /// time its brake needs to stop from the pushed speed (a robot shoved by a mover and still
+    /// coasting to rest under the brake is the mover's doing; see [`pushed`]).
     pub moving_collisions: u64,
     /// Steps at which the shield was given at least one moving object.
     pub mover_steps: u64,
@@ -279,7 +281,9 @@ pub struct Episode {
     estimate_change: Pose2,
     velocity: [Real; 3],
     /// The body's velocity a step before `velocity`.
-    previous_velocity: [Real; 3],
+    /// The footprint's fastest point's speed (m/s) at the starts of the latest two steps the
+    /// body moved under its own power (see [`EpisodeSummary::moving_collisions`]).
+    own_speeds: [Real; 2],
     /// The velocity the shield took last step (`odometry_velocity`).
     believed: [Real; 3],
     last_command: [Real; 3],
@@ -291,6 +295,8 @@ pub struct Episode {
     in_contact: bool,
     /// Time of the latest step in contact (−∞ before any).
     last_contact: Real,
+    /// Until when (s) the body's motion is a push's doing (−∞ before any push).
+    pushed_until: Real,
     seed: u64,
     tracker: MoverTracker,
     /// The movers of the latest scan (its body frame) and as the shield takes them now.
@@ -304,6 +310,16 @@ pub const MOVING_CONTACT_SPEED: Real = 0.05;
 
 /// Contact-free time (s) that separates two contact events.
 pub const CONTACT_EVENT_GAP: Real = 0.5;
+
+/// Whether the body's velocity change over one step of `dt` (world frame translation, and the
+/// turn rate) is more than the tracker can command: an outside force (a mover's push, a
+/// contact's impulse) moved the body. The tracker changes the translation by at most
+/// `|a_max| dt` and the turn rate by `alpha_max dt`; half as much again and 0.01 m/s
+/// (0.05 rad/s) of slack absorb the solver's rounding.
+pub fn pushed(before: [Real; 3], after: [Real; 3], tracker: &crate::robot::TrackerConfig, dt: Real) -> bool {
+    let dv = (after[0] - before[0]).hypot(after[1] - before[1]);
+    dv > 1.5 * tracker.a_max[0].hypot(tracker.a_max[1]) * dt + 0.01 || (after[2] - before[2]).abs() > 1.5 * tracker.alpha_max * dt + 0.05
+}
 
 /// How far (m/s) the odometry's velocity may lie from the tracker model's prediction and still
 /// be taken; beyond it (a jump, a freeze, a slip) the model's is.
@@ -378,7 +394,7 @@ impl Episode {
             last_estimate: Pose2::default(),
             estimate_change: Pose2::default(),
             velocity: [0.0; 3],
-            previous_velocity: [0.0; 3],
+            own_speeds: [0.0; 2],
             believed: [0.0; 3],
             last_command: [0.0; 3],
             last: StepReport::default(),
@@ -388,6 +404,7 @@ impl Episode {
             solve_time_sum: 0.0,
             in_contact: false,
             last_contact: Real::NEG_INFINITY,
+            pushed_until: Real::NEG_INFINITY,
             seed,
             tracker,
             movers_scan: Vec::new(),
@@ -422,7 +439,7 @@ impl Episode {
         self.last_estimate = self.world.estimated_pose();
         self.estimate_change = Pose2::default();
         self.velocity = [0.0; 3];
-        self.previous_velocity = [0.0; 3];
+        self.own_speeds = [0.0; 2];
         self.believed = [0.0; 3];
         self.last_command = [0.0; 3];
         self.summary = EpisodeSummary { min_clearance: Real::INFINITY, min_h: Real::INFINITY, deadlock_time: Real::NAN, ..Default::default() };
@@ -430,6 +447,7 @@ impl Episode {
         self.solve_time_sum = 0.0;
         self.in_contact = false;
         self.last_contact = Real::NEG_INFINITY;
+        self.pushed_until = Real::NEG_INFINITY;
         self.last_shield = None;
         self.tracker.reset();
         self.index_scan()?;
@@ -542,9 +560,9 @@ impl Episode {
         let movers = self.movers_now.len();
         let r = self.config.shield.braking.footprint.radius();
         // the robot's own motion: its speed over the two steps before (a push that is about to
-        // become a contact moves the body one step early)
+        // become a contact moves the body a step or two early: pushed steps are not its own)
         let speed = |v: &[Real; 3]| v[0].hypot(v[1]) + r * v[2].abs();
-        let speed_before = speed(&self.velocity).min(speed(&self.previous_velocity));
+        let speed_before = self.own_speeds[0].min(self.own_speeds[1]);
         let (v_shield, v_error, distrusted) = self.shield_velocity();
         self.believed = v_shield;
         let state = BodyState::planar(0.0, omega)?.with_velocity(v_shield)?.with_velocity_error(v_error)?;
@@ -577,7 +595,19 @@ impl Episode {
         let reward = r.coverage * new_coverage - r.collision * cost - r.intervention * intervention;
         self.estimate_change = self.last_estimate.between(&step.estimated_pose);
         self.last_estimate = step.estimated_pose;
-        self.previous_velocity = self.velocity;
+        // a push (a velocity change the tracker cannot command) or a contact makes the body's
+        // motion the pusher's until the brake could have stopped it from the speed it has
+        let world_v = |v: &[Real; 3], yaw: Real| {
+            let (sn, cs) = yaw.sin_cos();
+            [cs * v[0] - sn * v[1], sn * v[0] + cs * v[1], v[2]]
+        };
+        let tracker = &self.config.world.tracker;
+        if contact || pushed(world_v(&self.velocity, before.yaw), world_v(&step.velocity, p.yaw), tracker, self.config.world.dt) {
+            let stop = step.velocity[0].hypot(step.velocity[1]) / tracker.a_max[0].min(tracker.a_max[1]) + 2.0 * tracker.tau + self.config.world.dt;
+            self.pushed_until = self.pushed_until.max(step.time + stop);
+        } else if step.time > self.pushed_until {
+            self.own_speeds = [self.own_speeds[1], speed(&step.velocity)];
+        }
         self.velocity = step.velocity;
         self.last_command = u;
         let odometry_error = (step.estimated_pose.x - p.x).hypot(step.estimated_pose.y - p.y);

@@ -32,5 +32,5 @@ pub use action::{check_action, nominal_command, ActionMode, ACTION_TOLERANCE};
 pub use batch::{AutoReset, Batch, SlotOutcome};
 pub use coverage::{Coverage, CoverageConfig, Piece, COVERAGE_GRID, LINE_OF_SIGHT_TOLERANCE, PROBE_OFFSET};
 pub use deadlock::{DeadlockConfig, DeadlockMonitor};
-pub use episode::{Episode, EpisodeConfig, EpisodeSummary, RewardConfig, Site, StepReport, REWARD_WEIGHT_LIMIT};
+pub use episode::{pushed, Episode, EpisodeConfig, EpisodeSummary, RewardConfig, Site, StepReport, CONTACT_EVENT_GAP, MOVING_CONTACT_SPEED, REWARD_WEIGHT_LIMIT};
 pub use observation::{bin_ranges, ObservationConfig, PROPRIO_LEN};
