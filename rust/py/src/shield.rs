@@ -250,6 +250,12 @@ impl PyShield {
         self.run(py, points, u_nom, Some(position), yaw, omega, rotation, extra_A, extra_b, velocity, movers)
     }
 
+    /// Forgets the escape the braking shield is running (it keeps one from call to call while
+    /// a mover comes at the robot): call it when the robot's run starts anew.
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+
     /// The configuration as a dict of the constructor's keyword arguments.
     #[getter]
     fn config<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {

@@ -450,6 +450,7 @@ impl Episode {
         self.pushed_until = Real::NEG_INFINITY;
         self.last_shield = None;
         self.tracker.reset();
+        self.shield.reset();
         self.index_scan()?;
         self.compensate_points();
         self.inspect();

@@ -76,6 +76,9 @@ pub struct Shield {
     pub(super) buf64: Vec<f64>,
     /// The braking check's replayed path, reused from call to call.
     pub(super) brake_path: Vec<[f64; 2]>,
+    /// The world-frame direction of the escape sent at the previous call, kept while it still
+    /// passes (see `filter_braking`): cleared by [`Shield::reset`] and by any other command.
+    pub(super) escape: Option<[f64; 2]>,
     /// The braking check's points within reach, moved (rows of 2), reused from call to call.
     pub(super) near32: Vec<f32>,
     pub(super) near64: Vec<f64>,
@@ -156,6 +159,7 @@ impl Shield {
             buf32: Vec::new(),
             buf64: Vec::new(),
             brake_path: Vec::new(),
+            escape: None,
             near32: Vec::new(),
             near64: Vec::new(),
             moved32: Vec::new(),
@@ -187,6 +191,12 @@ impl Shield {
     /// The SIMD level the composite kernel runs at.
     pub fn simd_level(&self) -> SimdLevel {
         self.level
+    }
+
+    /// Forgets what the braking shield keeps from call to call (the escape it is running):
+    /// call it when the robot's episode starts anew.
+    pub fn reset(&mut self) {
+        self.escape = None;
     }
 
     /// 2 for a planar shield, 3 for 3D.

@@ -33,6 +33,9 @@ const THREAT_HORIZON: f64 = 2.5;
 const ESCAPE_TURN_GAIN: f64 = 3.0;
 /// How long (s) an escape is held in its check before the brake.
 const ESCAPE_HOLD: f64 = 1.0;
+/// How much more margin (m) another escape must keep than the one running for the shield to
+/// switch: an escape changed at every call goes nowhere.
+const ESCAPE_SWITCH: f64 = 0.3;
 /// The escapes' directions in the current body frame: ahead, back, to either side, and the
 /// four diagonals.
 const ESCAPES: [[f64; 2]; 8] = [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [0.7, 0.7], [0.7, -0.7], [-0.7, 0.7], [-0.7, -0.7]];
@@ -48,12 +51,16 @@ pub(super) struct Decision {
     pub clearance: f64,
     /// The row's full command's swept clearance less the clearance required (m).
     pub sweep_margin: f64,
+    /// The escape sent: its direction in the current body frame.
+    pub escape: Option<[f64; 2]>,
 }
 
 /// The candidates of one call: the row's command and the tight-space command, body frame.
 struct Candidates<'a> {
     /// The moving objects, and the acceleration they may add.
     movers: &'a [crate::sensors::Mover],
+    /// The escape running (sent at the previous call), in the current body frame.
+    running: Option<[f64; 2]>,
     mover_accel: f64,
     row: [f64; 3],
     tight: [f64; 3],
@@ -180,8 +187,8 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
     }
     // a mover coming at the standing robot: stepping out of its way beats being reached at
     // rest. Each escape is held for ESCAPE_HOLD in its check, then the brake: it passes the
-    // static check over every point and keeps the movers' margin while the robot moves; the
-    // one keeping the most margin is sent
+    // static check over every point and keeps the movers' margin while the robot moves
+    let mut escape = None;
     if !c.movers.is_empty() && model.standing_mover_margin(c.movers, c.mover_accel, THREAT_HORIZON) < keep {
         let hold = (ESCAPE_HOLD / model.dt).ceil().max(1.0) as usize;
         let t = &model.tracker;
@@ -195,17 +202,20 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
                 [b[0] * speed, b[1] * speed, (ESCAPE_TURN_GAIN * b[1].atan2(b[0])).clamp(-t.w_max, t.w_max)]
             }
         };
-        let dirs: [[f64; 2]; ESCAPES.len()] = std::array::from_fn(|k| {
-            let n = ESCAPES[k][0].hypot(ESCAPES[k][1]);
-            [ESCAPES[k][0] / n, ESCAPES[k][1] / n]
+        // the eight directions, and the escape running (last, when there is one)
+        const N: usize = ESCAPES.len() + 1;
+        let dirs: [[f64; 2]; N] = std::array::from_fn(|k| {
+            let d = if k < ESCAPES.len() { ESCAPES[k] } else { c.running.unwrap_or(ESCAPES[0]) };
+            let n = d[0].hypot(d[1]);
+            [d[0] / n, d[1] / n]
         });
-        let sweeps: [Sweep; ESCAPES.len()] = std::array::from_fn(|k| model.sweep_steered(c.v0, hold, path, steer(dirs[k])));
-        let (raw, _) = if c.all_far { ([f64::MAX; ESCAPES.len()], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
+        let sweeps: [Sweep; N] = std::array::from_fn(|k| model.sweep_steered(c.v0, hold, path, steer(dirs[k])));
+        let (raw, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
         // the first period's command with the brake after it passes too: the next call may
         // find nothing better than the brake, and braking is safe by induction only from
         // what was checked with the brake
-        let firsts: [Sweep; ESCAPES.len()] = std::array::from_fn(|k| model.sweep_with(c.v0, steer(dirs[k])(0.0), path));
-        let (raw1, _) = if c.all_far { ([f64::MAX; ESCAPES.len()], 0.0) } else { clearances_of(std::array::from_fn(|k| &firsts[k].planes), &here, whole, None, keep, level) };
+        let firsts: [Sweep; N] = std::array::from_fn(|k| model.sweep_with(c.v0, steer(dirs[k])(0.0), path));
+        let (raw1, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &firsts[k].planes), &here, whole, None, keep, level) };
         // the first period's command as sent, within the world-frame box
         let sent = |k: usize| {
             let first = steer(dirs[k])(0.0);
@@ -213,18 +223,29 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
             let scale = (0..2).map(|j| if w[j].abs() > c.box_world[j] { c.box_world[j] / w[j].abs() } else { 1.0 }).fold(1.0, f64::min);
             [w[0] * scale, w[1] * scale, first[2]]
         };
-        let best = (0..ESCAPES.len())
+        // of those keeping the margin while the robot moves, the one keeping the most is sent
+        let passing: Vec<(usize, f64, [f64; 3])> = (0..N)
+            .filter(|&k| k < ESCAPES.len() || c.running.is_some())
             .filter(|&k| static_ok(&sweeps[k], raw[k]) && static_ok(&firsts[k], raw1[k]))
             .map(|k| (k, model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k]))))
             .filter(|&(_, m)| m >= keep)
             .map(|(k, m)| (k, m, sent(k)))
             .filter(|(_, _, w)| meets_rows(extra, w))
-            .max_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some((_, _, w)) = best {
+            .collect();
+        let best = passing.iter().max_by(|a, b| a.1.total_cmp(&b.1));
+        // the escape running goes on unless another keeps clearly more margin: an escape
+        // changed at every call goes nowhere
+        let running = passing.iter().find(|e| e.0 == N - 1);
+        let pick = match (running, best) {
+            (Some(r), Some(b)) if b.1 <= r.1 + ESCAPE_SWITCH => Some(r),
+            (_, b) => b,
+        };
+        if let Some(&(k, _, w)) = pick {
             chosen = Some((w, false));
+            escape = Some(dirs[k]);
         }
     }
-    Decision { command: chosen.map(|(cmd, _)| cmd), tight: chosen.is_some_and(|(_, t)| t), clearance, sweep_margin }
+    Decision { command: chosen.map(|(cmd, _)| cmd), tight: chosen.is_some_and(|(_, t)| t), clearance, sweep_margin, escape }
 }
 
 /// Whether the world-frame command `u` (translation, `ω`) meets the user's rows `aᵀu ≥ b`, up to
@@ -295,7 +316,7 @@ impl Shield {
             sol.u[k] /= w;
         }
         let recovering = b.h_min < 0.0;
-        let mut decision = Decision { command: Some([sol.u[0], sol.u[1], sol.u[2]]), tight: false, clearance: f64::MAX, sweep_margin: f64::NAN };
+        let mut decision = Decision { command: Some([sol.u[0], sol.u[1], sol.u[2]]), tight: false, clearance: f64::MAX, sweep_margin: f64::NAN, escape: None };
         if dim == 2 && (b.num_points > 0 || !scan.movers().is_empty()) {
             let v0 = *state.velocity.as_ref().ok_or_else(|| Error::invalid("velocity", "the braking shield needs the body's measured velocity (v_x, v_y, ω), body frame"))?;
             // the tight-space command: the nominal one in the box and the user's rows
@@ -318,6 +339,11 @@ impl Shield {
                 None => sol = QpSolution { u: [0.0; MAX_VARS], active: true, feasible: sol.feasible },
             }
         }
+        // the escape sent, kept in the world frame for the next call
+        self.escape = decision.escape.map(|d| {
+            let w = crate::math::mat_vec(&r, &[d[0], d[1], 0.0]);
+            [w[0], w[1]]
+        });
         let mut u = [0.0; MAX_VARS];
         u[..dim].copy_from_slice(&sol.u[..dim]);
         let mut omega_out = [0.0; 3];
@@ -380,8 +406,13 @@ impl Shield {
             + model.clearance()
             + REACH_SLACK;
         let all_far = b.h_min >= 0.0 && shortest * (1.0 + b.h_min.min(1e12)).sqrt() > bound;
+        let running = self.escape.map(|d| {
+            let b = crate::math::mat_t_vec(r, &[d[0], d[1], 0.0]);
+            [b[0], b[1]]
+        });
         Candidates {
             movers,
+            running,
             mover_accel: self.config.mover_accel,
             box_world: [lim[0], lim[1]],
             v0,
