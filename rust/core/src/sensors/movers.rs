@@ -179,13 +179,14 @@ pub struct MoverTracker {
     movers: Vec<Mover>,
     pairs: Vec<(Real, usize, usize)>,
     norms: Vec<Real>,
+    breaks: Vec<bool>,
 }
 
 impl MoverTracker {
     /// A tracker with no tracks.
     pub fn new(config: MoverTrackerConfig) -> Result<Self> {
         config.validate()?;
-        Ok(Self { config, tracks: Vec::new(), time: None, pose: Pose2::default(), segments: Vec::new(), movers: Vec::new(), pairs: Vec::new(), norms: Vec::new() })
+        Ok(Self { config, tracks: Vec::new(), time: None, pose: Pose2::default(), segments: Vec::new(), movers: Vec::new(), pairs: Vec::new(), norms: Vec::new(), breaks: Vec::new() })
     }
 
     /// Forgets every track.
@@ -292,10 +293,15 @@ impl MoverTracker {
     fn segment(&mut self, points: &[[Real; 3]], pose: Pose2) {
         self.segments.clear();
         let n = points.len();
+        if n == 0 {
+            return;
+        }
         let gap = self.config.cluster_gap;
         let mut norms = std::mem::take(&mut self.norms);
         norms.clear();
-        norms.extend(points.iter().map(|p| p[0].hypot(p[1])));
+        // (`sqrt` of the sum, not `hypot`: ranges are far from overflow, and `hypot` per beam
+        // was a third of the tracker's time)
+        norms.extend(points.iter().map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()));
         // the gap grows with the beams' spacing at the nearer return's range (twice it), so
         // that a far wall's noisy returns stay one segment: `r_min sin Δθ = |p × q| / r_max`
         let joined = |a: usize, b: usize| {
@@ -305,15 +311,21 @@ impl MoverTracker {
             // (NaN, no return, compares false)
             dx * dx + dy * dy <= allowed * allowed
         };
+        // breaks[k]: return k is not joined to the one before it (the scan wraps around)
+        let mut breaks = std::mem::take(&mut self.breaks);
+        breaks.clear();
+        breaks.push(!joined(n - 1, 0));
+        breaks.extend((1..n).map(|k| !joined(k - 1, k)));
+        self.norms = norms;
         // start at a break so that an object across the scan's seam is one segment
-        let Some(start) = (0..n).find(|&k| !joined((k + n - 1) % n, k)) else {
-            self.norms = norms;
+        let Some(start) = breaks.iter().position(|&b| b) else {
+            self.breaks = breaks;
             return;
         };
         let mut first = None;
         for i in 0..=n {
-            let k = (start + i) % n;
-            let ends = i == n || !joined((k + n - 1) % n, k);
+            let k = if start + i >= n { start + i - n } else { start + i };
+            let ends = i == n || breaks[k];
             if ends {
                 if let Some(f) = first.take() {
                     self.close(points, f, i, start, pose);
@@ -323,7 +335,7 @@ impl MoverTracker {
                 first = Some(i);
             }
         }
-        self.norms = norms;
+        self.breaks = breaks;
     }
 
     /// The segment of scan indices `start + [from, to)` (mod the scan's length).
@@ -334,7 +346,7 @@ impl MoverTracker {
         if count < c.min_points {
             return;
         }
-        let pts = (from..to).map(|i| points[(start + i) % n]);
+        let pts = (from..to).map(|i| points[if start + i >= n { start + i - n } else { start + i }]);
         let (mut lo, mut hi, mut sum) = ([Real::INFINITY; 2], [Real::NEG_INFINITY; 2], [0.0; 2]);
         for p in pts.clone() {
             for k in 0..2 {
