@@ -204,14 +204,14 @@ impl BrakingModel {
     /// [`BrakingModel::sweep`] with the replayed path kept in `path` (cleared first), a buffer
     /// the caller reuses from call to call.
     pub fn sweep_with(&self, v0: [f64; 3], command: [f64; 3], path: &mut Vec<[f64; 2]>) -> Sweep {
-        self.sweep_steered(v0, 1, path, |_| command)
+        self.sweep_steered(v0, 1, path, |_, _, _| command)
     }
 
     /// [`BrakingModel::sweep_with`] with the command held `hold` periods (at least one) before
     /// the brake, each period's given by `steer` from the heading reached (rad, from the
-    /// current one).
-    pub fn sweep_steered(&self, v0: [f64; 3], hold: usize, path: &mut Vec<[f64; 2]>, steer: impl Fn(f64) -> [f64; 3]) -> Sweep {
-        let command = steer(0.0);
+    /// current one) and its sine and cosine.
+    pub fn sweep_steered(&self, v0: [f64; 3], hold: usize, path: &mut Vec<[f64; 2]>, steer: impl Fn(f64, f64, f64) -> [f64; 3]) -> Sweep {
+        let command = steer(0.0, 0.0, 1.0);
         let t = &self.tracker;
         let dt = self.dt;
         let gain = t.gain(dt);
@@ -237,7 +237,7 @@ impl BrakingModel {
             th_hi = th_hi.max(th);
             steps += 1;
             let held = steps < hold;
-            v = t.next_velocity(v, if held { steer(th) } else { [0.0; 3] }, gain, dt).0;
+            v = t.next_velocity(v, if held { steer(th, s, c) } else { [0.0; 3] }, gain, dt).0;
             // once the acceleration limits no longer bind, every component decays by the same
             // factor `1 − gain` per period: the rest of the path is summed in closed form below
             let lagging = !held && (0..2).all(|k| v[k].abs() * gain <= t.a_max[k] * dt) && v[2].abs() * gain <= t.alpha_max * dt;
@@ -308,14 +308,14 @@ impl BrakingModel {
     /// [`BrakingModel::clearance`] leaves the robot at rest before any mover that keeps to
     /// those bounds reaches it: passive safety.
     pub fn mover_margin(&self, v0: [f64; 3], command: [f64; 3], movers: &[Mover], accel: f64) -> f64 {
-        self.mover_margin_steered(v0, 1, movers, accel, |_| command)
+        self.mover_margin_steered(v0, 1, movers, accel, |_, _, _| command)
     }
 
     /// [`BrakingModel::mover_margin`] with the command held `hold` periods (at least one)
     /// before the brake, each period's given by `steer` from the heading reached (rad, from
-    /// the current one).
-    pub fn mover_margin_steered(&self, v0: [f64; 3], hold: usize, movers: &[Mover], accel: f64, steer: impl Fn(f64) -> [f64; 3]) -> f64 {
-        let command = steer(0.0);
+    /// the current one) and its sine and cosine.
+    pub fn mover_margin_steered(&self, v0: [f64; 3], hold: usize, movers: &[Mover], accel: f64, steer: impl Fn(f64, f64, f64) -> [f64; 3]) -> f64 {
+        let command = steer(0.0, 0.0, 1.0);
         if movers.is_empty() {
             return f64::INFINITY;
         }
@@ -324,14 +324,22 @@ impl BrakingModel {
         let gain = t.gain(dt);
         let fp = &self.footprint;
         let r = fp.radius();
-        let moving = |v: &[f64; 3]| v[0].hypot(v[1]) + r * v[2].abs() > REST_SPEED;
+        let speed = |v: &[f64; 3]| (v[0] * v[0] + v[1] * v[1]).sqrt() + r * v[2].abs();
+        let moving = |v: &[f64; 3]| speed(v) > REST_SPEED;
+        // (a mover's own half-period of travel, per mover, once: `hypot` per step and mover
+        // was a tenth of the escapes' cost)
+        let mut half_step = [0.0; 8];
+        for (h, m) in half_step.iter_mut().zip(movers) {
+            *h = 0.5 * dt * m.velocity[0].hypot(m.velocity[1]);
+        }
         let mut worst = f64::INFINITY;
         let mut check = |time: f64, x: f64, y: f64, s: f64, c: f64, v: &[f64; 3]| {
-            let own = 0.5 * dt * (v[0].hypot(v[1]) + r * v[2].abs());
-            for m in movers {
+            let own = 0.5 * dt * speed(v);
+            for (i, m) in movers.iter().enumerate() {
                 let (dx, dy) = (m.centre[0] + time * m.velocity[0] - x, m.centre[1] + time * m.velocity[1] - y);
                 let q = [c * dx + s * dy, -s * dx + c * dy];
-                let spread = m.velocity_std * time + 0.5 * accel * time * time + own + 0.5 * dt * m.velocity[0].hypot(m.velocity[1]);
+                let half = if i < half_step.len() { half_step[i] } else { 0.5 * dt * m.velocity[0].hypot(m.velocity[1]) };
+                let spread = m.velocity_std * time + 0.5 * accel * time * time + own + half;
                 worst = worst.min(fp.clearance(q) - m.radius - spread);
             }
         };
@@ -350,7 +358,7 @@ impl BrakingModel {
             (s, c) = turned(s, c, turn, th);
             steps += 1;
             check(steps as f64 * dt, x, y, s, c, &v);
-            v = t.next_velocity(v, if steps < hold { steer(th) } else { [0.0; 3] }, gain, dt).0;
+            v = t.next_velocity(v, if steps < hold { steer(th, s, c) } else { [0.0; 3] }, gain, dt).0;
         }
         worst
     }

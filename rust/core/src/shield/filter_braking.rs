@@ -194,12 +194,15 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
         let t = &model.tracker;
         // an escape runs along a direction fixed in the current frame: the body turns to face
         // it and drives at the most speed the box allows along it
+        // (the heading error is the direction's angle less the heading, wrapped: no `atan2` or
+        // `sin_cos` per replayed period, the escapes' largest cost)
         let steer = |d: [f64; 2]| {
-            move |th: f64| {
-                let (s, co) = th.sin_cos();
+            let goal = d[1].atan2(d[0]);
+            move |th: f64, s: f64, co: f64| {
                 let b = [co * d[0] + s * d[1], -s * d[0] + co * d[1]];
                 let speed = (t.v_max[0] / b[0].abs().max(1e-12)).min(t.v_max[1] / b[1].abs().max(1e-12));
-                [b[0] * speed, b[1] * speed, (ESCAPE_TURN_GAIN * b[1].atan2(b[0])).clamp(-t.w_max, t.w_max)]
+                let error = (goal - th + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+                [b[0] * speed, b[1] * speed, (ESCAPE_TURN_GAIN * error).clamp(-t.w_max, t.w_max)]
             }
         };
         // the eight directions, and the escape running (last, when there is one)
@@ -209,29 +212,34 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
             let n = d[0].hypot(d[1]);
             [d[0] / n, d[1] / n]
         });
-        let sweeps: [Sweep; N] = std::array::from_fn(|k| model.sweep_steered(c.v0, hold, path, steer(dirs[k])));
-        let (raw, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
-        // the first period's command with the brake after it passes too: the next call may
-        // find nothing better than the brake, and braking is safe by induction only from
-        // what was checked with the brake
-        let firsts: [Sweep; N] = std::array::from_fn(|k| model.sweep_with(c.v0, steer(dirs[k])(0.0), path));
-        let (raw1, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &firsts[k].planes), &here, whole, None, keep, level) };
-        // the first period's command as sent, within the world-frame box
-        let sent = |k: usize| {
-            let first = steer(dirs[k])(0.0);
-            let w = crate::math::mat_vec(&c.rotation, &[first[0], first[1], 0.0]);
-            let scale = (0..2).map(|j| if w[j].abs() > c.box_world[j] { c.box_world[j] / w[j].abs() } else { 1.0 }).fold(1.0, f64::min);
-            [w[0] * scale, w[1] * scale, first[2]]
+        // the movers' margin first (a replay each): where no escape keeps it, the static
+        // checks over every point are not needed
+        let margins: [f64; N] =
+            std::array::from_fn(|k| if k < ESCAPES.len() || c.running.is_some() { model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k])) } else { f64::NEG_INFINITY });
+        let passing: Vec<(usize, f64, [f64; 3])> = if margins.iter().all(|&m| m < keep) {
+            Vec::new()
+        } else {
+            let sweeps: [Sweep; N] = std::array::from_fn(|k| model.sweep_steered(c.v0, hold, path, steer(dirs[k])));
+            let (raw, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
+            // the first period's command with the brake after it passes too: the next call may
+            // find nothing better than the brake, and braking is safe by induction only from
+            // what was checked with the brake
+            let firsts: [Sweep; N] = std::array::from_fn(|k| model.sweep_with(c.v0, steer(dirs[k])(0.0, 0.0, 1.0), path));
+            let (raw1, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &firsts[k].planes), &here, whole, None, keep, level) };
+            // the first period's command as sent, within the world-frame box
+            let sent = |k: usize| {
+                let first = steer(dirs[k])(0.0, 0.0, 1.0);
+                let w = crate::math::mat_vec(&c.rotation, &[first[0], first[1], 0.0]);
+                let scale = (0..2).map(|j| if w[j].abs() > c.box_world[j] { c.box_world[j] / w[j].abs() } else { 1.0 }).fold(1.0, f64::min);
+                [w[0] * scale, w[1] * scale, first[2]]
+            };
+            // of those keeping the margin while the robot moves, the one keeping the most is sent
+            (0..N)
+                .filter(|&k| margins[k] >= keep && static_ok(&sweeps[k], raw[k]) && static_ok(&firsts[k], raw1[k]))
+                .map(|k| (k, margins[k], sent(k)))
+                .filter(|(_, _, w)| meets_rows(extra, w))
+                .collect()
         };
-        // of those keeping the margin while the robot moves, the one keeping the most is sent
-        let passing: Vec<(usize, f64, [f64; 3])> = (0..N)
-            .filter(|&k| k < ESCAPES.len() || c.running.is_some())
-            .filter(|&k| static_ok(&sweeps[k], raw[k]) && static_ok(&firsts[k], raw1[k]))
-            .map(|k| (k, model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k]))))
-            .filter(|&(_, m)| m >= keep)
-            .map(|(k, m)| (k, m, sent(k)))
-            .filter(|(_, _, w)| meets_rows(extra, w))
-            .collect();
         let best = passing.iter().max_by(|a, b| a.1.total_cmp(&b.1));
         // the escape running goes on unless another keeps clearly more margin: an escape
         // changed at every call goes nowhere
