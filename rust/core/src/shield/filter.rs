@@ -79,6 +79,8 @@ pub struct Shield {
     /// The world-frame direction of the escape sent at the previous call, kept while it still
     /// passes (see `filter_braking`): cleared by [`Shield::reset`] and by any other command.
     pub(super) escape: Option<[f64; 2]>,
+    /// Calls in a row that sent an escape.
+    pub(super) escape_calls: u32,
     /// The braking check's points within reach, moved (rows of 2), reused from call to call.
     pub(super) near32: Vec<f32>,
     pub(super) near64: Vec<f64>,
@@ -160,6 +162,7 @@ impl Shield {
             buf64: Vec::new(),
             brake_path: Vec::new(),
             escape: None,
+            escape_calls: 0,
             near32: Vec::new(),
             near64: Vec::new(),
             moved32: Vec::new(),
@@ -197,6 +200,7 @@ impl Shield {
     /// call it when the robot's episode starts anew.
     pub fn reset(&mut self) {
         self.escape = None;
+        self.escape_calls = 0;
     }
 
     /// 2 for a planar shield, 3 for 3D.

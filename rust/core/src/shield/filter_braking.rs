@@ -36,6 +36,9 @@ const ESCAPE_HOLD: f64 = 1.0;
 /// How much more margin (m) another escape must keep than the one running for the shield to
 /// switch: an escape changed at every call goes nowhere.
 const ESCAPE_SWITCH: f64 = 0.3;
+/// Calls (periods) between reviews of every escape while one runs; in between, the one running
+/// is checked alone and kept if it passes.
+const ESCAPE_REVIEW: u32 = 5;
 /// The escapes' directions in the current body frame: ahead, back, to either side, and the
 /// four diagonals.
 const ESCAPES: [[f64; 2]; 8] = [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [0.7, 0.7], [0.7, -0.7], [-0.7, 0.7], [-0.7, -0.7]];
@@ -61,6 +64,8 @@ struct Candidates<'a> {
     movers: &'a [crate::sensors::Mover],
     /// The escape running (sent at the previous call), in the current body frame.
     running: Option<[f64; 2]>,
+    /// Every escape is weighed at this call (else only the one running, if it passes).
+    review: bool,
     mover_accel: f64,
     row: [f64; 3],
     tight: [f64; 3],
@@ -212,43 +217,60 @@ fn decide<T: Lane>(model: &BrakingModel, level: SimdLevel, mut set: PointSet<'_,
             let n = d[0].hypot(d[1]);
             [d[0] / n, d[1] / n]
         });
-        // the movers' margin first (a replay each): where no escape keeps it, the static
-        // checks over every point are not needed
-        let margins: [f64; N] =
-            std::array::from_fn(|k| if k < ESCAPES.len() || c.running.is_some() { model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k])) } else { f64::NEG_INFINITY });
-        let passing: Vec<(usize, f64, [f64; 3])> = if margins.iter().all(|&m| m < keep) {
-            Vec::new()
-        } else {
-            let sweeps: [Sweep; N] = std::array::from_fn(|k| model.sweep_steered(c.v0, hold, path, steer(dirs[k])));
-            let (raw, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
-            // the first period's command with the brake after it passes too: the next call may
-            // find nothing better than the brake, and braking is safe by induction only from
-            // what was checked with the brake
-            let firsts: [Sweep; N] = std::array::from_fn(|k| model.sweep_with(c.v0, steer(dirs[k])(0.0, 0.0, 1.0), path));
-            let (raw1, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &firsts[k].planes), &here, whole, None, keep, level) };
-            // the first period's command as sent, within the world-frame box
-            let sent = |k: usize| {
-                let first = steer(dirs[k])(0.0, 0.0, 1.0);
-                let w = crate::math::mat_vec(&c.rotation, &[first[0], first[1], 0.0]);
-                let scale = (0..2).map(|j| if w[j].abs() > c.box_world[j] { c.box_world[j] / w[j].abs() } else { 1.0 }).fold(1.0, f64::min);
-                [w[0] * scale, w[1] * scale, first[2]]
+        // the first period's command as sent, within the world-frame box
+        let sent = |k: usize| {
+            let first = steer(dirs[k])(0.0, 0.0, 1.0);
+            let w = crate::math::mat_vec(&c.rotation, &[first[0], first[1], 0.0]);
+            let scale = (0..2).map(|j| if w[j].abs() > c.box_world[j] { c.box_world[j] / w[j].abs() } else { 1.0 }).fold(1.0, f64::min);
+            [w[0] * scale, w[1] * scale, first[2]]
+        };
+        // between reviews the escape running is checked alone, and kept if it passes
+        let mut pick = None;
+        if c.running.is_some() && !c.review {
+            let k = N - 1;
+            let margin = model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k]));
+            if margin >= keep {
+                let sweep = model.sweep_steered(c.v0, hold, path, steer(dirs[k]));
+                let first = model.sweep_with(c.v0, steer(dirs[k])(0.0, 0.0, 1.0), path);
+                let ([raw, raw1], _) = if c.all_far { ([f64::MAX; 2], 0.0) } else { clearances_of([&sweep.planes, &first.planes], &here, whole, None, keep, level) };
+                if static_ok(&sweep, raw) && static_ok(&first, raw1) && meets_rows(extra, &sent(k)) {
+                    pick = Some((k, sent(k)));
+                }
+            }
+        }
+        if pick.is_none() {
+            // the movers' margin first (a replay each): where no escape keeps it, the static
+            // checks over every point are not needed
+            let margins: [f64; N] =
+                std::array::from_fn(|k| if k < ESCAPES.len() || c.running.is_some() { model.mover_margin_steered(c.v0, hold, c.movers, c.mover_accel, steer(dirs[k])) } else { f64::NEG_INFINITY });
+            let passing: Vec<(usize, f64, [f64; 3])> = if margins.iter().all(|&m| m < keep) {
+                Vec::new()
+            } else {
+                let sweeps: [Sweep; N] = std::array::from_fn(|k| model.sweep_steered(c.v0, hold, path, steer(dirs[k])));
+                let (raw, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &sweeps[k].planes), &here, whole, None, keep, level) };
+                // the first period's command with the brake after it passes too: the next call
+                // may find nothing better than the brake, and braking is safe by induction only
+                // from what was checked with the brake
+                let firsts: [Sweep; N] = std::array::from_fn(|k| model.sweep_with(c.v0, steer(dirs[k])(0.0, 0.0, 1.0), path));
+                let (raw1, _) = if c.all_far { ([f64::MAX; N], 0.0) } else { clearances_of(std::array::from_fn(|k| &firsts[k].planes), &here, whole, None, keep, level) };
+                // of those keeping the margin while the robot moves, the one keeping the most
+                (0..N)
+                    .filter(|&k| margins[k] >= keep && static_ok(&sweeps[k], raw[k]) && static_ok(&firsts[k], raw1[k]))
+                    .map(|k| (k, margins[k], sent(k)))
+                    .filter(|(_, _, w)| meets_rows(extra, w))
+                    .collect()
             };
-            // of those keeping the margin while the robot moves, the one keeping the most is sent
-            (0..N)
-                .filter(|&k| margins[k] >= keep && static_ok(&sweeps[k], raw[k]) && static_ok(&firsts[k], raw1[k]))
-                .map(|k| (k, margins[k], sent(k)))
-                .filter(|(_, _, w)| meets_rows(extra, w))
-                .collect()
-        };
-        let best = passing.iter().max_by(|a, b| a.1.total_cmp(&b.1));
-        // the escape running goes on unless another keeps clearly more margin: an escape
-        // changed at every call goes nowhere
-        let running = passing.iter().find(|e| e.0 == N - 1);
-        let pick = match (running, best) {
-            (Some(r), Some(b)) if b.1 <= r.1 + ESCAPE_SWITCH => Some(r),
-            (_, b) => b,
-        };
-        if let Some(&(k, _, w)) = pick {
+            let best = passing.iter().max_by(|a, b| a.1.total_cmp(&b.1));
+            // the escape running goes on unless another keeps clearly more margin: an escape
+            // changed at every call goes nowhere
+            let running = passing.iter().find(|e| e.0 == N - 1);
+            pick = match (running, best) {
+                (Some(r), Some(b)) if b.1 <= r.1 + ESCAPE_SWITCH => Some(r),
+                (_, b) => b,
+            }
+            .map(|&(k, _, w)| (k, w));
+        }
+        if let Some((k, w)) = pick {
             chosen = Some((w, false));
             escape = Some(dirs[k]);
         }
@@ -348,6 +370,7 @@ impl Shield {
             }
         }
         // the escape sent, kept in the world frame for the next call
+        self.escape_calls = if decision.escape.is_some() { self.escape_calls + 1 } else { 0 };
         self.escape = decision.escape.map(|d| {
             let w = crate::math::mat_vec(&r, &[d[0], d[1], 0.0]);
             [w[0], w[1]]
@@ -421,6 +444,7 @@ impl Shield {
         Candidates {
             movers,
             running,
+            review: self.escape_calls % ESCAPE_REVIEW == 0,
             mover_accel: self.config.mover_accel,
             box_world: [lim[0], lim[1]],
             v0,
