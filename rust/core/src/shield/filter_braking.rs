@@ -444,7 +444,7 @@ impl Shield {
         Candidates {
             movers,
             running,
-            review: self.escape_calls % ESCAPE_REVIEW == 0,
+            review: self.escape_calls.is_multiple_of(ESCAPE_REVIEW),
             mover_accel: self.config.mover_accel,
             box_world: [lim[0], lim[1]],
             v0,
