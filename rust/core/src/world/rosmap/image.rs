@@ -5,26 +5,13 @@ use std::path::Path;
 
 use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader, Limits};
 
+use super::grey::{GreyImage, MAX_IMAGE_PIXELS};
 use super::meta::RosMapMeta;
 use super::pgm::read_pgm;
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::world::geometry::Pose2;
 use crate::world::grid::{Cell, OccupancyGrid};
-
-/// An 8-bit luminance image with an "unknown" mask (alpha 0).
-#[derive(Debug)]
-pub(super) struct GreyImage {
-    pub(super) width: usize,
-    pub(super) height: usize,
-    /// Row-major from the top row.
-    pub(super) value: Vec<u8>,
-    pub(super) transparent: Vec<bool>,
-}
-
-/// The most pixels a map image may have (8192 × 8192): its header is checked before anything
-/// is allocated, so a small file declaring a huge image is an error, not an abort.
-pub const MAX_IMAGE_PIXELS: usize = 1 << 26;
 
 /// The largest map image file read (bytes); only regular files are read (not `/dev/zero`).
 pub const MAX_IMAGE_BYTES: u64 = 512 << 20;

@@ -36,12 +36,14 @@ use super::scenario::{Scenario, COORDINATE_LIMIT};
 use crate::error::{Error, Result};
 use crate::math::Real;
 
+mod grey;
 mod image;
 mod meta;
 mod pgm;
 mod start;
 
-pub use image::{rasterize, MAX_IMAGE_BYTES, MAX_IMAGE_PIXELS};
+pub use grey::MAX_IMAGE_PIXELS;
+pub use image::{rasterize, MAX_IMAGE_BYTES};
 pub use meta::{parse_ros_yaml, RosMapMeta, YAML_KEYS};
 use start::interior_start;
 pub use start::{enclosure, known_area, ENCLOSURE, ENCLOSURE_RAYS, START_CLEARANCE};

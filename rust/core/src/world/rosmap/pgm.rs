@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use super::image::{GreyImage, MAX_IMAGE_PIXELS};
+use super::grey::{GreyImage, MAX_IMAGE_PIXELS};
 use crate::error::{Error, Result};
 
 /// Decodes the P5 or P2 PGM `bytes`; `path` names the file in errors.
