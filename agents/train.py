@@ -137,25 +137,29 @@ class TrainingSafety(BaseCallback):
             self._touched = np.zeros(len(infos), dtype=bool)
             self._contacts = np.zeros(len(infos), dtype=np.int64)
         t = self.totals
-        for i, info in enumerate(infos):
-            cost = info.get("cost", 0.0) > 0.0
-            t["steps"] += 1
-            t["contact_steps"] += int(cost)
-            t["interventions"] += int(info.get("intervention", 0.0) > 1e-9)
-            t["infeasible_steps"] += int(not info.get("shield_feasible", True))
-            t["braked_steps"] += int(info.get("shield_braked", False))
-            t["recovering_steps"] += int(info.get("shield_recovering", False))
-            self._touched[i] |= cost
-            self._contacts[i] += int(cost)
-            if dones[i]:
-                t["episodes"] += 1
-                t["episodes_with_contact"] += int(self._touched[i])
-                monitor, summary = info.get("episode", {}), info.get("shieldnav_episode", {})
-                self.episodes.append({"timesteps": self.num_timesteps, "return": float(monitor.get("r", np.nan)), "length": int(monitor.get("l", 0)),
-                                      "coverage": float(summary.get("coverage", np.nan)), "contact_steps": int(self._contacts[i]),
-                                      "run_contact_steps": t["contact_steps"]})
-                self._touched[i] = False
-                self._contacts[i] = 0
+        n = len(infos)
+        # (a column per key, not a dict update per environment and key: this callback runs at
+        # every vector step of a training run)
+        column = lambda key, default: np.fromiter((float(info.get(key, default)) for info in infos), dtype=float, count=n)  # noqa: E731
+        cost = column("cost", 0.0) > 0.0
+        t["steps"] += n
+        t["contact_steps"] += int(cost.sum())
+        t["interventions"] += int((column("intervention", 0.0) > 1e-9).sum())
+        t["infeasible_steps"] += int((column("shield_feasible", 1.0) == 0.0).sum())
+        t["braked_steps"] += int(column("shield_braked", 0.0).sum())
+        t["recovering_steps"] += int(column("shield_recovering", 0.0).sum())
+        self._touched |= cost
+        self._contacts += cost
+        for i in np.flatnonzero(dones):
+            info = infos[i]
+            t["episodes"] += 1
+            t["episodes_with_contact"] += int(self._touched[i])
+            monitor, summary = info.get("episode", {}), info.get("shieldnav_episode", {})
+            self.episodes.append({"timesteps": self.num_timesteps, "return": float(monitor.get("r", np.nan)), "length": int(monitor.get("l", 0)),
+                                  "coverage": float(summary.get("coverage", np.nan)), "contact_steps": int(self._contacts[i]),
+                                  "run_contact_steps": t["contact_steps"]})
+            self._touched[i] = False
+            self._contacts[i] = 0
         for k, v in t.items():
             self.logger.record(f"train_safety/{k}", v)
         return True
