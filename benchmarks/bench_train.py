@@ -24,18 +24,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # agents, run as a script
 
-import gymnasium as gym
-import numpy as np
 import shieldnav
+
+from benchmarks.bench_vector import run as env_alone
 
 ENV_ID = "shieldnav/CorridorInspection-v0"
 CONFIGS: dict[str, dict[str, Any]] = {
@@ -45,21 +45,6 @@ CONFIGS: dict[str, dict[str, Any]] = {
     "sb3-256": {"num_envs": 256, "hyperparams": {"n_steps": 32, "batch_size": 8192, "n_epochs": 4}},
     "sb3-256-1k": {"num_envs": 256, "hyperparams": {"n_steps": 32, "batch_size": 1024, "n_epochs": 10}},
 }
-
-
-def env_alone(num_envs: int, seconds: float) -> float:
-    """Steps/s of the native batch under random actions, the braking shield, as trained."""
-    v = gym.make_vec(ENV_ID, num_envs=num_envs, vectorization_mode="vector_entry_point", shield="braking")
-    v.reset(seed=0)
-    actions = np.random.default_rng(0).uniform(-1, 1, (64, num_envs, 3)).astype(np.float32)
-    steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        for k in range(16):
-            v.step(actions[k % 64])
-        steps += 16 * num_envs
-    rate = steps / (time.perf_counter() - t0)
-    v.close()
-    return rate
 
 
 def sb3(config: dict[str, Any], timesteps: int, seed: int) -> dict[str, Any]:
@@ -79,9 +64,10 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--timesteps", type=int, default=65_536)
     ap.add_argument("--configs", nargs="+", default=list(CONFIGS), choices=list(CONFIGS))
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--env-seconds", type=float, default=5.0, help="how long the native batch alone is timed")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    rows = [{"config": "env alone, 64 envs", "steps_per_s": env_alone(64, 5.0)}]
+    rows = [{"config": "env alone, 64 envs", "steps_per_s": env_alone(ENV_ID, 64, os.cpu_count() or 1, args.env_seconds)}]
     print(f"{rows[0]['config']:24} {rows[0]['steps_per_s']:10,.0f} steps/s", flush=True)
     for name in args.configs:
         r = {"config": name, **CONFIGS[name], **sb3(CONFIGS[name], args.timesteps, args.seed)}
