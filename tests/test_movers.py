@@ -92,3 +92,22 @@ def test_a_pedestrian_head_on_is_not_driven_into(tmp_path):
     blind, _ = episode_totals(path, track_movers=False)
     assert blind["moving_collisions"] > 0, "taken as static, the walker was expected to be driven into"
     assert tracked["contact_steps"] < blind["contact_steps"]
+
+
+def test_an_escape_once_sent_is_kept_until_reset():
+    # a walker 4 m ahead coming at 1.5 m/s, a wall 1.5 m behind: the robot steps aside, away
+    # from the walker's side. Seen a little to the other side at the next call, the walker
+    # would send it the other way; the escape running is kept (near-equal escapes alternated
+    # and went nowhere) until reset() forgets it
+    wall = np.array([[-1.5, y] for y in np.linspace(-4.0, 4.0, 81)])
+    sh = Shield(method="braking")
+
+    def step(side):
+        walker = np.array([[4.0, side, -1.5, 0.0, 0.3, 0.1]])
+        return sh.filter(wall, [0.0, 0.0], omega=0.0, velocity=[0.0, 0.0, 0.0], movers=walker).u
+
+    first = step(0.1)
+    assert first[1] == pytest.approx(-0.8) and first[0] == pytest.approx(0.0, abs=1e-9)
+    assert step(-0.1)[1] == pytest.approx(-0.8)
+    sh.reset()
+    assert step(-0.1)[1] == pytest.approx(0.8)
