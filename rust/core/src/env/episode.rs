@@ -280,7 +280,6 @@ pub struct Episode {
     last_estimate: Pose2,
     estimate_change: Pose2,
     velocity: [Real; 3],
-    /// The body's velocity a step before `velocity`.
     /// The footprint's fastest point's speed (m/s) at the starts of the latest two steps the
     /// body moved under its own power (see [`EpisodeSummary::moving_collisions`]).
     own_speeds: [Real; 2],

@@ -326,19 +326,14 @@ impl BrakingModel {
         let r = fp.radius();
         let speed = |v: &[f64; 3]| (v[0] * v[0] + v[1] * v[1]).sqrt() + r * v[2].abs();
         let moving = |v: &[f64; 3]| speed(v) > REST_SPEED;
-        // (a mover's own half-period of travel, per mover, once: `hypot` per step and mover
-        // was a tenth of the escapes' cost)
-        let mut half_step = [0.0; 8];
-        for (h, m) in half_step.iter_mut().zip(movers) {
-            *h = 0.5 * dt * m.velocity[0].hypot(m.velocity[1]);
-        }
         let mut worst = f64::INFINITY;
         let mut check = |time: f64, x: f64, y: f64, s: f64, c: f64, v: &[f64; 3]| {
             let own = 0.5 * dt * speed(v);
-            for (i, m) in movers.iter().enumerate() {
+            for m in movers {
                 let (dx, dy) = (m.centre[0] + time * m.velocity[0] - x, m.centre[1] + time * m.velocity[1] - y);
                 let q = [c * dx + s * dy, -s * dx + c * dy];
-                let half = if i < half_step.len() { half_step[i] } else { 0.5 * dt * m.velocity[0].hypot(m.velocity[1]) };
+                // (`sqrt`, not `hypot`: this runs per replayed period and mover)
+                let half = 0.5 * dt * (m.velocity[0] * m.velocity[0] + m.velocity[1] * m.velocity[1]).sqrt();
                 let spread = m.velocity_std * time + 0.5 * accel * time * time + own + half;
                 worst = worst.min(fp.clearance(q) - m.radius - spread);
             }
