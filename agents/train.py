@@ -41,6 +41,7 @@ except ImportError as err:  # pragma: no cover
 
 from shieldnav.registration import ENV_IDS
 from shieldnav.sb3 import ShieldnavVecEnv
+from shieldnav.vector import CorridorInspectionVectorEnv
 
 from agents import benchmark
 from agents.lagrangian import PPOLagrangian
@@ -77,23 +78,27 @@ def seed_number(text: str) -> int:
 
 
 def evaluate(model: Any, env_id: str, episodes: int, seed: int, **kwargs: Any) -> dict[str, float]:
-    """Deterministic episodes of ``model`` on single environments seeded ``seed + k``."""
-    env = gym.make(env_id, **kwargs)
-    rows = []
-    for k in range(episodes):
-        obs, _ = env.reset(seed=seed + k)
-        ret, done = 0.0, False
-        while not done:
-            action, _ = model.predict(obs, deterministic=True)
-            obs, reward, terminated, truncated, info = env.step(action)
-            ret += float(reward)
-            done = terminated or truncated
-        s = info["shieldnav_episode"]
-        rows.append((ret, s["collisions"] > 0, s["deadlock"], s["coverage"], s["contact_time"]))
-    env.close()
-    r = np.asarray(rows, dtype=float)
-    return {"return": r[:, 0].mean(), "episodes_with_contact": r[:, 1].mean(), "deadlock_rate": r[:, 2].mean(),
-            "coverage": r[:, 3].mean(), "contact_time": r[:, 4].mean()}
+    """Deterministic episodes of ``model``, seeded ``seed + k``, side by side on the native batch
+    (one sub-environment an episode, each stopped at its first episode's end): the same
+    episodes as single environments reset with those seeds, at the batch's speed."""
+    kwargs = {**gym.spec(env_id).kwargs, **kwargs}
+    venv = CorridorInspectionVectorEnv(episodes, autoreset_mode="next_step", **kwargs)
+    obs, _ = venv.reset(seed=seed)
+    returns = np.zeros(episodes)
+    running = np.ones(episodes, dtype=bool)
+    rows = np.zeros((episodes, 4))
+    while running.any():
+        action, _ = model.predict(obs, deterministic=True)
+        obs, reward, terminated, truncated, info = venv.step(action)
+        returns += np.where(running, reward, 0.0)
+        ended = running & (terminated | truncated)
+        if ended.any():
+            totals = info["shieldnav_episode"]
+            rows[ended] = np.stack([totals["collisions"] > 0, totals["deadlock"], totals["coverage"], totals["contact_time"]], axis=1)[ended]
+            running &= ~ended
+    venv.close()
+    return {"return": returns.mean(), "episodes_with_contact": rows[:, 0].mean(), "deadlock_rate": rows[:, 1].mean(),
+            "coverage": rows[:, 2].mean(), "contact_time": rows[:, 3].mean()}
 
 
 class EvalSafety(BaseCallback):

@@ -202,3 +202,32 @@ def test_a_missing_progress_bar_package_is_reported_before_training(tmp_path, ca
     with pytest.raises(ImportError, match="the progress bar needs tqdm and rich"):
         train.train("ppo", CP, "composite", 64, 1, 0, tmp_path / "run", tensorboard=False)
     assert not (tmp_path / "run").exists()
+
+
+def test_evaluation_on_the_batch_equals_single_environment_episodes():
+    """`train.evaluate` runs its episodes side by side on the native batch; each must be the
+    episode a single environment reset with the same seed gives under the same policy."""
+
+    class Steer:  # deterministic, state-free, and different per observation
+        def predict(self, obs, deterministic=True):
+            obs = np.asarray(obs, dtype=float)
+            return np.tanh(np.stack([obs[..., 0] - 0.3, obs[..., 1], 0.5 * obs[..., 2]], axis=-1)).astype(np.float32), None
+
+    kwargs = {"shield": "braking", "max_episode_steps": 150, "time_limit": 150}
+    batch = train.evaluate(Steer(), CP, 3, 40, **kwargs)
+    rows = []
+    for k in range(3):
+        env = gym.make(CP, **kwargs)
+        obs, _ = env.reset(seed=40 + k)
+        ret, done = 0.0, False
+        while not done:
+            obs, reward, terminated, truncated, info = env.step(Steer().predict(obs)[0])
+            ret += float(reward)
+            done = terminated or truncated
+        s = info["shieldnav_episode"]
+        rows.append((ret, s["collisions"] > 0, s["deadlock"], s["coverage"], s["contact_time"]))
+        env.close()
+    r = np.asarray(rows, dtype=float).mean(axis=0)
+    assert batch["coverage"] > 0
+    np.testing.assert_allclose([batch[k] for k in ("return", "episodes_with_contact", "deadlock_rate", "coverage", "contact_time")], r,
+                               rtol=1e-6, atol=1e-9)
