@@ -11,8 +11,10 @@ Safety over every training step (contact steps, episodes with contact, intervent
 infeasible, braked and recovering steps) is logged as ``train_safety/*`` and kept in
 ``run.json`` under ``training_safety``.
 
-    python -m agents.train --algo ppo --env shieldnav/CorridorInspection-v0 --shield braking \\
-        --timesteps 300000 --num-envs 8 --seed 0 --out runs/ppo_braking
+Hyperparameters, the number of environments and the run's length come from an rl-zoo3-style
+file, ``agents/hyperparams/<algo>.yml`` (``--hyperparams FILE`` for another); flags override them.
+
+    python -m agents.train --algo ppo --env shieldnav/CorridorInspection-v0 --shield braking --seed 0 --out runs/ppo_braking
 """
 
 from __future__ import annotations
@@ -47,12 +49,37 @@ from agents import benchmark
 from agents.lagrangian import PPOLagrangian
 
 ALGOS = {"ppo": PPO, "sac": SAC, "ppo_lagrangian": PPOLagrangian}
-#: Hyperparameters each algorithm gets unless the caller (an experiment file) says otherwise.
-DEFAULT_HYPERPARAMS: dict[str, dict[str, Any]] = {
-    "ppo": {"n_steps": 256, "batch_size": 256},
-    "ppo_lagrangian": {"n_steps": 256, "batch_size": 256, "cost_limit": 10.0},
-    "sac": {"learning_starts": 1000},
-}
+#: The hyperparameter files, one an algorithm (``<algo>.yml``), in rl-zoo3's format.
+HYPERPARAMS = Path(__file__).with_name("hyperparams")
+#: The keys of a hyperparameter block that are not constructor keywords (rl-zoo3's names).
+RUN_KEYS = ("policy", "n_timesteps", "n_envs")
+
+
+def hyperparameters(algo: str, env_id: str, path: Path | None = None) -> dict[str, Any]:
+    """The block for ``env_id`` of the rl-zoo3-style file ``path`` (default:
+    ``agents/hyperparams/<algo>.yml``): ``policy``, ``n_envs``, ``n_timesteps`` and the
+    algorithm's constructor keywords."""
+    import yaml
+
+    path = Path(path) if path is not None else HYPERPARAMS / f"{algo}.yml"
+    try:
+        blocks = yaml.safe_load(path.read_text())
+    except OSError as err:
+        raise InvalidArgumentError(f"invalid `hyperparams`: cannot read {path} ({err.strerror or err})") from err
+    except yaml.YAMLError as err:
+        raise InvalidArgumentError(f"invalid `hyperparams`: {path} is not YAML ({err})") from err
+    if not isinstance(blocks, dict) or not isinstance(blocks.get(env_id), dict):
+        raise InvalidArgumentError(f"invalid `hyperparams`: {path} has no block for {env_id!r} (rl-zoo3's format: a block per environment id)")
+    block = dict(blocks[env_id])
+    for key in ("n_envs", "n_timesteps"):
+        value = block.get(key, 1)
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or value < 1 or value != int(value):
+            raise InvalidArgumentError(f"invalid `hyperparams`: {path}: {env_id}: `{key}` must be a whole number ≥ 1, got {value!r}")
+        if key in block:
+            block[key] = int(value)
+    return block
+
+
 #: Seeds SB3 accepts are below this (it seeds NumPy's global generator).
 SEED_END = 2**32
 
@@ -170,12 +197,15 @@ class TrainingSafety(BaseCallback):
         return True
 
 
-def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, seed: int, out: Path,
-          eval_every: int = 10_000, eval_episodes: int = 3, tensorboard: bool = True, progress: bool = True,
-          max_episode_steps: int | None = None, hyperparams: dict[str, Any] | None = None, policy: str = "MlpPolicy",
-          threads: int | None = None, **env_kwargs: Any) -> Path:
-    """Trains and saves ``out/model.zip``; returns its path. ``hyperparams`` go to the algorithm's
-    constructor over `DEFAULT_HYPERPARAMS` (rl-zoo3's per-algorithm keys). Every argument is
+def train(algo: str, env_id: str, shield: str, timesteps: int | None, num_envs: int | None, seed: int, out: Path,
+          eval_every: int = 50_000, eval_episodes: int = 8, tensorboard: bool = True, progress: bool = True,
+          max_episode_steps: int | None = None, hyperparams: dict[str, Any] | None = None, policy: str | None = None,
+          threads: int | None = None, hyperparams_file: Path | None = None, **env_kwargs: Any) -> Path:
+    """Trains and saves ``out/model.zip``; returns its path. The hyperparameters are the block
+    for ``env_id`` of ``hyperparams_file`` (default ``agents/hyperparams/<algo>.yml``, see
+    `hyperparameters`): ``timesteps``, ``num_envs`` and ``policy`` left ``None`` take its
+    ``n_timesteps``, ``n_envs`` and ``policy``; ``hyperparams`` go to the algorithm's
+    constructor over its other keys. Every argument is
     checked, and the environments built, before ``out`` is created. ``out/run.json`` (the run's
     settings, safety totals, training episodes, evaluations, wall time and env steps/s) is
     written last, whole or not at all: its presence means the run finished. ``threads``: the
@@ -188,6 +218,10 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
         raise InvalidArgumentError(f"invalid `shield`: expected one of {benchmark.SHIELDS}, got {shield!r}")
     if not 0 <= seed < SEED_END:
         raise InvalidArgumentError(f"invalid `seed`: must be in 0 … 2**32 − 1, got {seed}")
+    block = hyperparameters(algo, env_id, hyperparams_file)
+    timesteps = timesteps if timesteps is not None else block.get("n_timesteps", 200_000)
+    num_envs = num_envs if num_envs is not None else block.get("n_envs", 8)
+    policy = policy if policy is not None else block.get("policy", "MlpPolicy")
     counts = {"timesteps": timesteps, "num_envs": num_envs, "eval_every": eval_every, "eval_episodes": eval_episodes}
     if max_episode_steps is not None:
         counts["max_episode_steps"] = max_episode_steps
@@ -207,7 +241,6 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
         kwargs["max_episode_steps"] = max_episode_steps
     venv = VecCheckNan(VecMonitor(ShieldnavVecEnv(env_id, num_envs=num_envs, threads=threads, **kwargs)), raise_exception=True)
     venv.seed(seed)
-    out.mkdir(parents=True, exist_ok=True)
     tb = None
     if tensorboard:
         try:
@@ -217,10 +250,15 @@ def train(algo: str, env_id: str, shield: str, timesteps: int, num_envs: int, se
         except ImportError:
             print("tensorboard not installed: no TensorBoard logs (pip install tensorboard)")
     Algo = ALGOS[algo]
-    params: dict[str, Any] = {**DEFAULT_HYPERPARAMS[algo], **(hyperparams or {})}
+    params: dict[str, Any] = {**{k: v for k, v in block.items() if k not in RUN_KEYS}, **(hyperparams or {})}
     if algo == "ppo_lagrangian":
         params.setdefault("episode_steps", max_episode_steps or ENV_IDS[env_id][1])
-    model = Algo(policy, venv, seed=seed, device="cpu", tensorboard_log=tb, verbose=0, **params)
+    try:
+        model = Algo(policy, venv, seed=seed, device="cpu", tensorboard_log=tb, verbose=0, **params)
+    except (TypeError, ValueError, AssertionError) as err:  # an unknown or out-of-range keyword (SB3 asserts some): name it
+        venv.close()
+        raise InvalidArgumentError(f"invalid `hyperparams` for {algo} on {env_id}: {err}") from err
+    out.mkdir(parents=True, exist_ok=True)
     if tb is None:
         # SB3 would otherwise log to a new folder under the system's temp folder on every run
         model.set_logger(configure_logger(str(out), ["csv"]))
@@ -256,11 +294,13 @@ def main(argv: list[str] | None = None) -> Path:
     ap.add_argument("--algo", default="ppo", choices=sorted(ALGOS))
     ap.add_argument("--env", type=benchmark.env_id, default="shieldnav/CorridorInspection-v0")
     ap.add_argument("--shield", default="braking", choices=benchmark.SHIELDS)
-    ap.add_argument("--timesteps", type=benchmark.positive_int, default=200_000)
-    ap.add_argument("--num-envs", type=benchmark.positive_int, default=8)
+    ap.add_argument("--timesteps", type=benchmark.positive_int, default=None, help="default: the hyperparameter block's n_timesteps")
+    ap.add_argument("--num-envs", type=benchmark.positive_int, default=None, help="default: the hyperparameter block's n_envs")
+    ap.add_argument("--hyperparams", type=Path, default=None, metavar="FILE",
+                    help="rl-zoo3-style hyperparameter file (default agents/hyperparams/<algo>.yml)")
     ap.add_argument("--seed", type=seed_number, default=0)
-    ap.add_argument("--eval-every", type=benchmark.positive_int, default=10_000)
-    ap.add_argument("--eval-episodes", type=benchmark.positive_int, default=3)
+    ap.add_argument("--eval-every", type=benchmark.positive_int, default=50_000, help="env steps between evaluations")
+    ap.add_argument("--eval-episodes", type=benchmark.positive_int, default=8, help="deterministic episodes an evaluation")
     ap.add_argument("--max-episode-steps", type=benchmark.positive_int, default=None)
     ap.add_argument("--out", default=None, help="run folder (default runs/<algo>_<shield>_<seed>)")
     ap.add_argument("--no-tensorboard", action="store_true")
@@ -270,7 +310,8 @@ def main(argv: list[str] | None = None) -> Path:
         ap.error(f"{missing}, or pass --no-progress")
     out = Path(args.out or f"runs/{args.algo}_{args.shield}_{args.seed}")
     path = train(args.algo, args.env, args.shield, args.timesteps, args.num_envs, args.seed, out, args.eval_every,
-                 args.eval_episodes, not args.no_tensorboard, not args.no_progress, args.max_episode_steps)
+                 args.eval_episodes, not args.no_tensorboard, not args.no_progress, args.max_episode_steps,
+                 hyperparams_file=args.hyperparams)
     totals = json.loads((path.parent / "run.json").read_text())["training_safety"]
     print(f"saved {path}; during training: {totals['contact_steps']} contact steps, "
           f"{totals['episodes_with_contact']} of {totals['episodes']} episodes with contact")

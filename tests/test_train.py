@@ -14,10 +14,12 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import yaml
 
 pytest.importorskip("torch")
 
 from shieldnav.exceptions import InvalidArgumentError  # noqa: E402
+from shieldnav.registration import ENV_IDS  # noqa: E402
 from shieldnav.sb3 import ShieldnavVecEnv  # noqa: E402
 
 from agents import benchmark, train  # noqa: E402
@@ -35,7 +37,7 @@ def test_ppo_trains_saves_reloads_and_is_benchmarked_identically_twice(tmp_path)
         path = train.main([
             "--algo", "ppo", "--env", "shieldnav/ConstrictedPassage-v0", "--shield", "composite", "--timesteps", "2048",
             "--num-envs", "4", "--seed", "3", "--eval-every", "1024", "--eval-episodes", "1", "--max-episode-steps", "200",
-            "--out", str(tmp_path / run), "--no-progress", "--no-tensorboard",
+            "--out", str(tmp_path / run), "--no-progress", "--no-tensorboard", "--hyperparams", str(small_hyperparams(tmp_path)),
         ])
         assert path.exists() and (tmp_path / run / "checkpoints").is_dir()
         logged = (tmp_path / run / "progress.csv").read_text().splitlines()
@@ -145,7 +147,8 @@ def test_a_model_is_benchmarked_on_two_workers(tmp_path):
     """Loading the model imports torch in the benchmark's process: workers forked from it hung
     for ever in torch's thread pools. A hang fails the test at the timeout."""
     path = train.main(["--env", CP, "--timesteps", "256", "--num-envs", "1", "--eval-every", "256", "--eval-episodes", "1",
-                       "--max-episode-steps", "20", "--out", str(tmp_path / "run"), "--no-progress", "--no-tensorboard"])
+                       "--max-episode-steps", "20", "--out", str(tmp_path / "run"), "--no-progress", "--no-tensorboard",
+                       "--hyperparams", str(small_hyperparams(tmp_path))])
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     argv = [sys.executable, "-m", "agents.benchmark", "--scenarios", CP, "--shields", "composite", "none", "--seeds", "1",
             "--workers", "2", "--max-steps", "20", "--policy", str(path), "--out", str(tmp_path / "bench"), "--no-plots"]
@@ -231,3 +234,54 @@ def test_evaluation_on_the_batch_equals_single_environment_episodes():
     assert batch["coverage"] > 0
     np.testing.assert_allclose([batch[k] for k in ("return", "episodes_with_contact", "deadlock_rate", "coverage", "contact_time")], r,
                                rtol=1e-6, atol=1e-9)
+
+
+def small_hyperparams(tmp_path: Path, **keys: object) -> Path:
+    """A hyperparameter file for ConstrictedPassage with rollouts small enough for a smoke test."""
+    block = {"policy": "MlpPolicy", "n_envs": 2, "n_timesteps": 128, "n_steps": 32, "batch_size": 32, "n_epochs": 2, **keys}
+    path = tmp_path / "ppo.yml"
+    path.write_text(yaml.safe_dump({CP: block}))
+    return path
+
+
+@pytest.mark.filterwarnings("ignore:You have specified a mini-batch size")  # two environments, not the block's
+def test_the_shipped_hyperparameter_files_hold_every_environment_and_build_their_algorithm():
+    for algo, Algo in train.ALGOS.items():
+        for env_id in ENV_IDS:
+            block = train.hyperparameters(algo, env_id)
+            assert block["n_envs"] >= 1 and block["n_timesteps"] >= 1 and block["policy"] == "MlpPolicy"
+            venv = ShieldnavVecEnv(env_id, num_envs=2)
+            keys = {k: v for k, v in block.items() if k not in train.RUN_KEYS}
+            Algo(block["policy"], venv, device="cpu", **keys)  # every key is a constructor keyword
+            venv.close()
+
+
+def test_the_command_line_takes_its_defaults_from_the_hyperparameter_file(tmp_path):
+    hp = small_hyperparams(tmp_path, learning_rate=0.001)
+    train.main(["--env", CP, "--hyperparams", str(hp), "--eval-every", "64", "--eval-episodes", "1", "--max-episode-steps", "20",
+                "--out", str(tmp_path / "run"), "--no-progress", "--no-tensorboard"])
+    meta = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert (meta["num_envs"], meta["timesteps"], meta["training_safety"]["steps"]) == (2, 128, 128)
+    assert meta["hyperparams"] == {"n_steps": 32, "batch_size": 32, "n_epochs": 2, "learning_rate": 0.001}
+    train.main(["--env", CP, "--hyperparams", str(hp), "--num-envs", "1", "--timesteps", "64", "--eval-every", "64", "--eval-episodes", "1",
+                "--max-episode-steps", "20", "--out", str(tmp_path / "flags"), "--no-progress", "--no-tensorboard"])
+    meta = json.loads((tmp_path / "flags" / "run.json").read_text())
+    assert (meta["num_envs"], meta["timesteps"]) == (1, 64), "flags override the file"
+
+
+@pytest.mark.parametrize("content, message", [
+    (None, "cannot read"),
+    ("a: [", "is not YAML"),
+    ("shieldnav/CorridorInspection-v0: {n_envs: 2}", "has no block for 'shieldnav/ConstrictedPassage-v0'"),
+    (f"{CP}: {{n_envs: 0}}", "`n_envs` must be a whole number ≥ 1, got 0"),
+    (f"{CP}: {{n_timesteps: 1.5}}", "`n_timesteps` must be a whole number ≥ 1, got 1.5"),
+    (f"{CP}: {{n_envs: 2, n_stepz: 32}}", "invalid `hyperparams` for ppo on shieldnav/ConstrictedPassage-v0"),
+    (f"{CP}: {{n_envs: 2, n_steps: 32, batch_size: 1}}", "invalid `hyperparams` for ppo on shieldnav/ConstrictedPassage-v0"),
+])
+def test_a_bad_hyperparameter_file_is_named_before_the_run_folder_is_made(content, message, tmp_path):
+    path = tmp_path / "hp.yml"
+    if content is not None:
+        path.write_text(content)
+    with pytest.raises(InvalidArgumentError, match=re.escape(message)):
+        train.train("ppo", CP, "braking", 64, None, 0, tmp_path / "run", progress=False, tensorboard=False, hyperparams_file=path)
+    assert not (tmp_path / "run").exists()
