@@ -171,8 +171,14 @@ class TrainingSafety(BaseCallback):
         t = self.totals
         n = len(infos)
         # (a column per key, not a dict update per environment and key: this callback runs at
-        # every vector step of a training run)
-        column = lambda key, default: np.fromiter((float(info.get(key, default)) for info in infos), dtype=float, count=n)  # noqa: E731
+        # every vector step of a training run; the native batch's adapter has the columns ready)
+        columns = getattr(self.training_env.unwrapped, "step_info", None) if self.training_env is not None else None
+
+        def column(key: str, default: float) -> np.ndarray:
+            if columns is not None:
+                return np.asarray(columns[key], dtype=float) if key in columns else np.full(n, default)
+            return np.fromiter((float(info.get(key, default)) for info in infos), dtype=float, count=n)
+
         cost = column("cost", 0.0) > 0.0
         t["steps"] += n
         t["contact_steps"] += int(cost.sum())

@@ -124,6 +124,27 @@ def test_sb3_adapter_follows_same_step_autoreset():
         assert not np.array_equal(infos[i]["terminal_observation"], obs[i]), "obs is already the next episode's"
 
 
+
+def test_the_adapters_step_info_columns_are_the_infos_entries():
+    """`step_info` (what `TrainingSafety` reads) holds each environment's per-step entries as
+    its info dict does, an ended episode's last step included."""
+    v = ShieldnavVecEnv(CP, num_envs=3, max_episode_steps=7, shield="braking")
+    v.seed(1)
+    v.reset()
+    rng = np.random.default_rng(0)
+    ended = 0
+    for _ in range(20):
+        v.step_async(rng.uniform(-1, 1, (3, 3)).astype(np.float32))
+        _, _, dones, infos = v.step_wait()
+        ended += int(dones.sum())
+        assert {"cost", "intervention", "shield_braked", "clearance"} <= set(v.step_info)
+        for key, column in v.step_info.items():
+            assert len(column) == 3
+            for i in range(3):
+                np.testing.assert_array_equal(column[i], infos[i][key], err_msg=f"{key}[{i}], done={dones[i]}")
+    assert ended >= 6
+    v.close()
+
 @pytest.mark.parametrize("value", ["0", "-5"])
 @pytest.mark.parametrize("option", COUNTS.values())
 def test_command_line_rejects_a_count_below_one_before_training(option, value, tmp_path, capsys):
