@@ -80,6 +80,8 @@ def hyperparameters(algo: str, env_id: str, path: Path | None = None) -> dict[st
     return block
 
 
+#: The evaluation episodes of a run seeded ``seed`` are seeded ``seed + EVAL_SEED_OFFSET + k``.
+EVAL_SEED_OFFSET = 10_000
 #: Seeds SB3 accepts are below this (it seeds NumPy's global generator).
 SEED_END = 2**32
 
@@ -268,7 +270,7 @@ def train(algo: str, env_id: str, shield: str, timesteps: int | None, num_envs: 
     if tb is None:
         # SB3 would otherwise log to a new folder under the system's temp folder on every run
         model.set_logger(configure_logger(str(out), ["csv"]))
-    evaluator = EvalSafety(env_id, eval_every, eval_episodes, seed + 10_000, eval_kwargs)
+    evaluator = EvalSafety(env_id, eval_every, eval_episodes, seed + EVAL_SEED_OFFSET, eval_kwargs)
     checkpoints = CheckpointCallback(save_freq=max(eval_every // num_envs, 1), save_path=str(out / "checkpoints"), name_prefix=algo)
     safety = TrainingSafety()
     start = time.perf_counter()
