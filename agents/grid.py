@@ -4,8 +4,10 @@
     python -m agents.grid experiments/safe_rl.yml --out results/grid/safe_rl --backend ray [--ray-address auto]
 
 The file follows rl-zoo3's conventions for the hyperparameters: a block per algorithm with
-``policy``, ``n_timesteps``, ``n_envs`` and the algorithm's constructor keywords; methods name an
-algorithm, a shield and any environment keyword, and may override hyperparameters::
+``policy``, ``n_timesteps``, ``n_envs`` and the algorithm's constructor keywords, over the
+environment's block of ``agents/hyperparams/<algo>.yml`` (``{}``: those of ``agents.train``);
+methods name an algorithm, a shield and any environment keyword, and may override
+hyperparameters::
 
     seeds: [0, 1, 2]
     envs:                       # folder name: {id: registered id, any environment keyword}
@@ -43,13 +45,12 @@ from pathlib import Path
 from typing import Any, Iterator
 
 import yaml
+from shieldnav.exceptions import InvalidArgumentError
 
-from agents import benchmark
+from agents import benchmark, train
 from agents.pool import as_finished
-from agents.train import ALGOS, SEED_END, write_json_atomically
+from agents.train import ALGOS, RUN_KEYS, SEED_END, write_json_atomically
 
-#: The keys of an algorithm's block that are not constructor keywords (rl-zoo3's names).
-RUN_KEYS = ("policy", "n_timesteps", "n_envs")
 METHOD_KEYS = {"algo", "shield", "env_kwargs", "hyperparams"}
 TOP_KEYS = {"seeds", "envs", "eval", "algos", "methods", "max_episode_steps"}
 
@@ -82,8 +83,8 @@ def load(path: Path | str) -> dict[str, Any]:
     for name, block in data["algos"].items():
         if name not in ALGOS:
             raise GridError(f"{path}: unknown algorithm {name!r} (known: {sorted(ALGOS)})")
-        if not isinstance(block, dict) or "n_timesteps" not in block:
-            raise GridError(f"{path}: algorithm {name!r} needs `n_timesteps`")
+        if not isinstance(block, dict):
+            raise GridError(f"{path}: algorithm {name!r} needs a block of hyperparameters ({{}} for agents/hyperparams/{name}.yml's), got {block!r}")
     for name, method in data["methods"].items():
         if not isinstance(method, dict) or set(method) - METHOD_KEYS or "algo" not in method:
             raise GridError(f"{path}: method {name!r} needs `algo` and takes only {sorted(METHOD_KEYS)}, got {method!r}")
@@ -103,7 +104,11 @@ def runs(config: dict[str, Any], out: Path) -> list[dict[str, Any]]:
         for env_name, env in config["envs"].items():
             env_kwargs = {k: v for k, v in env.items() if k != "id"}
             for method, m in config["methods"].items():
-                block = dict(config["algos"][m["algo"]])
+                try:
+                    defaults = train.hyperparameters(m["algo"], env["id"])
+                except InvalidArgumentError as err:
+                    raise GridError(str(err)) from None
+                block = {**defaults, **config["algos"][m["algo"]]}
                 hyper = {k: v for k, v in block.items() if k not in RUN_KEYS}
                 hyper.update(m.get("hyperparams", {}))
                 n_timesteps = int(float(block["n_timesteps"]))
@@ -129,8 +134,6 @@ def finished(run: dict[str, Any]) -> bool:
 def train_run(run: dict[str, Any], threads: int | None = None) -> dict[str, Any]:
     """Trains one run into its folder (any unfinished leftovers are removed first) and returns
     its ``run.json`` with the grid's names added."""
-    from agents import train  # torch loads here, in the worker
-
     folder = Path(run["folder"])
     if folder.exists() and not finished(run):
         shutil.rmtree(folder)

@@ -44,7 +44,12 @@ class CostPenalty(VecEnvWrapper):
 
     def step_wait(self) -> Any:
         obs, rewards, dones, infos = self.venv.step_wait()
-        costs = np.array([float(info.get("cost", 0.0)) for info in infos])
+        # (the native batch's adapter has the costs as a column: no pass over the infos)
+        columns = getattr(self.venv.unwrapped, "step_info", None)
+        if columns is not None and "cost" in columns:
+            costs = np.asarray(columns["cost"], dtype=float)
+        else:
+            costs = np.array([float(info.get("cost", 0.0)) for info in infos])
         self.cost += float(costs.sum())
         self.steps += len(costs)
         return obs, rewards - np.float32(self.owner.lagrange_multiplier) * costs.astype(np.float32), dones, infos

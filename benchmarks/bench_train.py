@@ -16,7 +16,8 @@ approach). Configurations (``--configs``):
 - ``defaults``: what ``python -m agents.train`` runs (``agents/hyperparams/ppo.yml``);
 - ``sb3-8x256``: 8 environments, ``n_steps`` 256, ``batch_size`` 256, 10 epochs, learning rate
   3e-4 (stable-baselines3's own PPO settings with rl-zoo3's usual 8 environments);
-- ``sb3-256-1k``: 256 environments, ``n_steps`` 32, ``batch_size`` 1024, 10 epochs, 3e-4.
+- ``sb3-256x64-4k``: 256 environments, ``n_steps`` 64, ``batch_size`` 4096, 4 epochs, 1e-3 (few,
+  large minibatches: 16 gradient steps a rollout of 16,384 samples).
 
     python benchmarks/bench_train.py                                   # 500k steps, seed 0
     python benchmarks/bench_train.py --seeds 0 1 2 --out results/bench_train.json
@@ -49,7 +50,7 @@ EVAL_EPISODES = 8
 CONFIGS: dict[str, dict[str, Any] | None] = {
     "defaults": None,
     "sb3-8x256": {"num_envs": 8, "hyperparams": {"n_steps": 256, "batch_size": 256, "n_epochs": 10, "learning_rate": 3e-4}},
-    "sb3-256-1k": {"num_envs": 256, "hyperparams": {"n_steps": 32, "batch_size": 1024, "n_epochs": 10, "learning_rate": 3e-4}},
+    "sb3-256x64-4k": {"num_envs": 256, "hyperparams": {"n_steps": 64, "batch_size": 4096, "n_epochs": 4, "learning_rate": 1e-3}},
 }
 
 

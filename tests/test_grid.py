@@ -16,7 +16,7 @@ pytest.importorskip("torch")
 
 from stable_baselines3.common.vec_env import DummyVecEnv  # noqa: E402
 
-from agents import grid  # noqa: E402
+from agents import grid, train  # noqa: E402
 from agents.lagrangian import PPOLagrangian, lagrange_update  # noqa: E402
 
 TINY = """
@@ -143,7 +143,7 @@ def test_local_worker_processes_give_the_in_process_results(tmp_path):
     ("envs", {"e": {"id": "CartPole-v1"}}, "env 'e'"),
     ("methods", {"x": {"algo": "ppo", "shield": "magic"}}, "shield must be one of"),
     ("bogus", 1, "unknown keys"),
-    ("algos", {"ppo": {"n_envs": 2}}, "needs `n_timesteps`"),
+    ("algos", {"ppo": [2]}, "needs a block of hyperparameters"),
 ])
 def test_a_wrong_experiment_file_is_refused_with_the_reason(tmp_path, key, value, message):
     data = yaml.safe_load(TINY)
@@ -257,3 +257,47 @@ def test_the_report_draws_each_environment_and_tables_every_method_with_the_scri
     safety = [json.loads((out / "cp" / "ppo_braking" / f"seed_{s}" / "run.json").read_text())["training_safety"] for s in (0, 1)]
     assert rows[0][2] == "2" and rows[0][8].endswith(f"({safety[0]['contact_steps']}, {safety[1]['contact_steps']})")
     assert json.loads((out / "scripted.json").read_text())  # the scripted agent's episodes, kept for the next report
+
+
+def test_an_algorithms_block_goes_over_the_training_defaults(tmp_path):
+    """`{}` runs `agents.train`'s hyperparameters for each environment; a key of the block
+    replaces the file's."""
+    data = yaml.safe_load(TINY)
+    data["algos"] = {"ppo": {}}
+    (tmp_path / "g.yml").write_text(yaml.safe_dump(data))
+    run = grid.runs(grid.load(tmp_path / "g.yml"), tmp_path)[0]
+    defaults = train.hyperparameters("ppo", run["env_id"])
+    assert (run["n_envs"], run["n_timesteps"], run["policy"]) == (defaults["n_envs"], defaults["n_timesteps"], defaults["policy"])
+    assert run["hyperparams"] == {k: v for k, v in defaults.items() if k not in train.RUN_KEYS}
+    data["algos"] = {"ppo": {"n_envs": 3, "n_epochs": 2}}
+    (tmp_path / "h.yml").write_text(yaml.safe_dump(data))
+    run = grid.runs(grid.load(tmp_path / "h.yml"), tmp_path)[0]
+    assert run["n_envs"] == 3 and run["hyperparams"]["n_epochs"] == 2
+    assert run["hyperparams"]["batch_size"] == defaults["batch_size"]
+
+
+def test_the_cost_penalty_reads_the_native_batchs_cost_column_as_the_infos_give_it():
+    from shieldnav.sb3 import ShieldnavVecEnv
+
+    from agents.lagrangian import CostPenalty
+
+    class Owner:
+        lagrange_multiplier = 2.0
+
+    # strafing into the corridor's wall without a shield: contact steps, and episodes that end
+    make = lambda: ShieldnavVecEnv("shieldnav/CorridorInspection-v0", num_envs=4, max_episode_steps=50, shield="none")  # noqa: E731
+    plain, penalised = make(), CostPenalty(make(), Owner())
+    for v in (plain, penalised):
+        v.seed(5)
+        v.reset()
+    rng = np.random.default_rng(1)
+    total = 0.0
+    for _ in range(60):
+        action = np.tile([0.3, 1.0, 0.0], (4, 1)) if rng.random() < 0.8 else rng.uniform(-1, 1, (4, 3))
+        _, reward, _, infos = plain.step(action.astype(np.float32))
+        _, shaped, _, _ = penalised.step(action.astype(np.float32))
+        cost = np.array([info["cost"] for info in infos])
+        total += cost.sum()
+        np.testing.assert_allclose(shaped, reward - np.float32(2.0) * cost.astype(np.float32))
+    assert total > 0, "no contact: the test compares nothing"
+    assert penalised.take() == (total, 240)

@@ -56,3 +56,30 @@ def test_the_command_line_runs_the_shipped_policy():
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["steps"] == 20
+
+
+def test_an_exported_sb3_model_acts_as_its_deterministic_prediction(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    import torch
+    from stable_baselines3 import PPO
+
+    from agents.export_policy import export
+
+    env = gym.make("shieldnav/ConstrictedPassage-v0")
+    model = PPO("MlpPolicy", env, seed=0, device="cpu")
+    with torch.no_grad():  # weights away from the initialisation's small action head
+        for p in model.policy.parameters():
+            p.add_(0.3 * torch.randn_like(p))
+    model.save(tmp_path / "m.zip")
+    export(tmp_path / "m.zip", tmp_path / "p.npz")
+    with np.load(tmp_path / "p.npz") as f:
+        policy = MlpPolicy({k: f[k] for k in f.files})
+    obs = np.stack([env.observation_space.sample() for _ in range(64)])
+    expected, _ = model.predict(obs, deterministic=True)
+    np.testing.assert_allclose(policy(obs), expected, atol=1e-5)
+    assert np.abs(expected).max() > 0.5
+    model = PPO("MlpPolicy", env, seed=0, device="cpu", policy_kwargs={"activation_fn": torch.nn.ReLU})
+    model.save(tmp_path / "relu.zip")
+    with pytest.raises(InvalidArgumentError, match="not an MlpPolicy with tanh layers"):
+        export(tmp_path / "relu.zip", tmp_path / "q.npz")
+    env.close()
