@@ -17,6 +17,7 @@ __all__ = [
     "Episode",
     "episode_defaults",
     "Batch",
+    "Node",
 ]
 
 _Vec = npt.ArrayLike
@@ -315,3 +316,49 @@ class Batch:
     def __len__(self) -> int: ...
     @property
     def observation_len(self) -> int: ...
+
+@final
+class Node:
+    """The ROS 2 node's decisions without the network (``shieldnav.replay``): each ``on_*``
+    takes the message's arrival time ``t`` (s, ≥ 0)."""
+
+    def __new__(cls, args: Sequence[str] = ...) -> Node: ...
+    def topics(self) -> dict[str, Any]: ...
+    @property
+    def method(self) -> str: ...
+    def timeouts(self) -> dict[str, Any]: ...
+    def on_scan(
+        self,
+        t: float,
+        frame_id: str,
+        angle_min: float,
+        angle_max: float,
+        angle_increment: float,
+        range_min: float,
+        range_max: float,
+        ranges: npt.NDArray[np.float32],
+        intensities: npt.NDArray[np.float32] | None = None,
+        time_increment: float = 0.0,
+        scan_time: float = 0.0,
+    ) -> str | None: ...
+    def on_cloud(
+        self,
+        t: float,
+        frame_id: str,
+        height: int,
+        width: int,
+        fields: Sequence[tuple[str, int, int, int]],
+        is_bigendian: bool,
+        point_step: int,
+        row_step: int,
+        data: bytes,
+        is_dense: bool = True,
+    ) -> str | None: ...
+    def reject_scan(self, reason: str) -> None: ...
+    def on_odometry(self, t: float, linear: Sequence[float], angular: Sequence[float]) -> str | None: ...
+    def on_imu(self, t: float, angular_velocity: Sequence[float]) -> str | None: ...
+    def reject_motion(self, reason: str) -> None: ...
+    def on_nominal(self, t: float, linear: Sequence[float], angular: Sequence[float]) -> tuple[list[float], str]: ...
+    def reject_nominal(self, t: float, reason: str) -> tuple[list[float], str]: ...
+    def tick(self, t: float) -> tuple[list[float], str] | None: ...
+    def command(self, t: float) -> tuple[list[float], str]: ...

@@ -5,6 +5,7 @@
     shieldnav run shieldnav/ConstrictedPassage-v0 --policy scripted --gif run.gif
     shieldnav filter scan.npy --u-nom 1.0 0.2        # the shield on a saved scan (N×2 or N×3)
     shieldnav filter scan.npy --u-nom 1 0 0 --semi-axes 0.9 0.45 0.4   # a 3D shield (N×3 scan)
+    shieldnav replay run.mcap --params shield.yaml --scan /front/scan --out run.shieldnav   # a recording
 
 ``--set key=value`` passes any environment keyword (``shieldnav.ENV_DEFAULTS``); values are
 read as JSON when they parse (numbers, lists, true/false/null), else as strings. Errors name
@@ -206,6 +207,37 @@ def cmd_filter(args: argparse.Namespace) -> None:
     }, indent=1))
 
 
+def cmd_replay(args: argparse.Namespace) -> None:
+    from shieldnav.replay import replay, summary_text
+
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists():
+        raise ValueError(f"invalid `--out`: {out} exists (the replay writes a new folder)")
+    node_args = (["--params", args.params] if args.params else []) + [a for pair in args.param for a in ("-p", pair)]
+    topics = {k: getattr(args, k) for k in ("scan", "cloud", "nominal", "odom", "imu") if getattr(args, k)}
+    result = replay(args.bag, node_args, topics, args.start, args.end)
+    print(summary_text(result))
+    if out is not None:
+        out.mkdir(parents=True)
+        columns = ["t", *(f"nominal_{a}" for a in ("vx", "vy", "vz", "wx", "wy", "wz")), *(f"command_{a}" for a in ("vx", "vy", "vz", "wx", "wy", "wz")),
+                   "H", "h_min", "clearance", "ok", "active", "feasible", "braked", "recovering", "tight", "points_used", "points_in_scan",
+                   "scan_age", "solve_time_us", "reason"]
+        tab = result.table
+        with (out / "table.csv").open("w") as f:
+            f.write(",".join(columns) + "\n")
+            for k in range(len(tab["t"])):
+                row = [tab["t"][k], *tab["nominal"][k], *tab["command"][k], *(tab[c][k] for c in columns[13:-1])]
+                f.write(",".join(f"{v:.9g}" if isinstance(v, (float, np.floating)) else str(int(v)) for v in row) + f",{json.dumps(tab['reason'][k])}\n")
+        (out / "summary.json").write_text(json.dumps(result.summary, indent=1))
+        mcap = result.write_mcap(out / "mcap")
+        written = [out / "table.csv", out / "summary.json", mcap]
+        try:
+            written.append(result.plot(out / "replay.png"))
+        except ImportError:
+            print("matplotlib not installed: no replay.png", file=sys.stderr)
+        print("wrote " + ", ".join(str(w) for w in written), file=sys.stderr)
+
+
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="shieldnav", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
@@ -233,6 +265,16 @@ def parser() -> argparse.ArgumentParser:
     f.add_argument("--semi-axes", type=float, nargs="+", default=None)
     f.add_argument("--method", default="composite", choices=["composite", "distance", "hardmin", "none"])
     f.set_defaults(func=cmd_filter)
+    y = sub.add_parser("replay", help="the shield on a recording (rosbag2 .mcap or .db3, ROS 1 .bag): what it would have sent")
+    y.add_argument("bag")
+    y.add_argument("--params", default=None, help="the node's parameter file (ROS 2 layout, as shieldnav-ros2 reads it)")
+    y.add_argument("-p", "--param", action="append", default=[], metavar="NAME:=VALUE", help="a node parameter over the file")
+    for kind in ("scan", "cloud", "nominal", "odom", "imu"):
+        y.add_argument(f"--{kind}", default=None, metavar="TOPIC", help=f"the recording's {kind} topic (default: the node's)")
+    y.add_argument("--start", type=float, default=None, help="seconds from the recording's start")
+    y.add_argument("--end", type=float, default=None, help="seconds from the recording's start")
+    y.add_argument("--out", default=None, help="a new folder for table.csv, summary.json, replay.png and the MCAP of the filtered command")
+    y.set_defaults(func=cmd_replay)
     return ap
 
 

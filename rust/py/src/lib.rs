@@ -8,6 +8,7 @@ mod batch;
 mod config;
 mod episode;
 mod errors;
+mod node;
 mod outcome;
 mod planner;
 mod shield;
@@ -22,5 +23,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     world::register(m)?;
     episode::register(m)?;
     batch::register(m)?;
+    node::register(m)?;
     Ok(())
 }

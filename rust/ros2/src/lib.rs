@@ -10,11 +10,13 @@
 //! malformed input, or a missing command, sends zero and says why.
 //!
 //! The decisions live in [`logic::ShieldNode`] and the message translation in
-//! [`translate`], both without the network; [`ros`] wires them to DDS.
+//! [`translate`], both without the network; `ros` (feature `dds`, on by default) wires them to
+//! DDS.
 
 pub mod logic;
 pub mod msg;
 pub mod params;
+#[cfg(feature = "dds")]
 pub mod ros;
 pub mod translate;
 
