@@ -1,10 +1,11 @@
 """Trained policies shipped with shieldnav, as plain arrays: evaluated with numpy, no torch.
 
 ``ppo``: PPO (stable-baselines3 ``MlpPolicy``: two tanh layers of 64, deterministic mean
-action) trained 290,000 steps on ``shieldnav/CorridorInspection-v0`` under the default
-braking shield, seed 0 (``python -m agents.train --algo ppo --timesteps 300000 --seed 0``, the
-checkpoint with the best evaluation coverage). It reads the flat observation of the default
-configuration (64 range bins)::
+action) trained 500,000 steps on ``shieldnav/CorridorInspection-v0`` under the default
+braking shield with 1,000-step episodes and ``agents.train``'s hyperparameters, seed 2 (the
+``ppo_braking`` run of ``experiments/safe_rl.yml``; ``python -m agents.train --max-episode-steps
+1000 --seed 2``), exported with ``python -m agents.export_policy``. It reads the flat
+observation of the default configuration (64 range bins)::
 
     import gymnasium as gym
     from shieldnav.policies import load
