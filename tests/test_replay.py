@@ -55,17 +55,25 @@ def message(store, msgtype: str, fields: dict):
     T = store.types
     sec, nsec = divmod(int(fields["t"] * 1e9), 10**9)
     if msgtype == "sensor_msgs/msg/LaserScan":
-        head = header(store, sec, nsec, "base_laser")
-        return T[msgtype](header=head, angle_min=float(ANGLES[0]), angle_max=float(ANGLES[-1]), angle_increment=float(2 * math.pi / BEAMS),
-                          time_increment=0.0, scan_time=0.04, range_min=0.05, range_max=30.0, ranges=fields["ranges"],
+        f = {"frame": "base_laser", "angle_min": float(ANGLES[0]), "angle_max": float(ANGLES[-1]), "angle_increment": float(2 * math.pi / BEAMS),
+             "range_min": 0.05, "range_max": 30.0, **fields}
+        head = header(store, sec, nsec, f["frame"])
+        return T[msgtype](header=head, angle_min=f["angle_min"], angle_max=f["angle_max"], angle_increment=f["angle_increment"],
+                          time_increment=0.0, scan_time=0.04, range_min=f["range_min"], range_max=f["range_max"], ranges=f["ranges"],
                           intensities=np.zeros(0, np.float32))
+    if msgtype == "tf2_msgs/msg/TFMessage":
+        transforms = []
+        for parent, child, (x, y, z), (qx, qy, qz, qw) in fields["transforms"]:
+            transforms.append(T["geometry_msgs/msg/TransformStamped"](header=header(store, sec, nsec, parent), child_frame_id=child, transform=T["geometry_msgs/msg/Transform"](
+                translation=T["geometry_msgs/msg/Vector3"](x=x, y=y, z=z), rotation=T["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw))))
+        return T[msgtype](transforms=transforms)
     v3 = T["geometry_msgs/msg/Vector3"]
     if msgtype == "nav_msgs/msg/Odometry":
         pose = T["geometry_msgs/msg/PoseWithCovariance"](pose=T["geometry_msgs/msg/Pose"](
             position=T["geometry_msgs/msg/Point"](x=0.0, y=0.0, z=0.0), orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)),
             covariance=np.zeros(36))
         twist = T["geometry_msgs/msg/TwistWithCovariance"](twist=T["geometry_msgs/msg/Twist"](
-            linear=v3(x=fields["v"][0], y=fields["v"][1], z=0.0), angular=v3(x=0.0, y=0.0, z=0.0)), covariance=np.zeros(36))
+            linear=v3(x=fields["v"][0], y=fields["v"][1], z=0.0), angular=v3(x=0.0, y=0.0, z=fields.get("w", 0.0))), covariance=np.zeros(36))
         return T[msgtype](header=header(store, sec, nsec, "odom"), child_frame_id="base_link", pose=pose, twist=twist)
     vx, vy, wz = fields["v"]
     twist = T["geometry_msgs/msg/Twist"](linear=v3(x=vx, y=vy, z=0.0), angular=v3(x=0.0, y=0.0, z=wz))
@@ -231,6 +239,7 @@ def test_the_command_line_writes_the_table_summary_picture_and_mcap(tmp_path, ca
     assert len(rows) == 51 and rows[0].startswith("t,nominal_vx")
     assert json.loads((tmp_path / "r" / "summary.json").read_text())["commands"] == 50
     assert (tmp_path / "r" / "replay.png").stat().st_size > 0 and list((tmp_path / "r" / "mcap").glob("*.mcap"))
+    assert (tmp_path / "r" / "closest.png").stat().st_size > 0 and "sensor mount (0.000, 0.000, 0.000) m" in out
     assert cli.main(["replay", str(tmp_path / "missing.mcap")]) == 2
     assert "does not exist" in capsys.readouterr().err
     assert cli.main(["replay", str(bag), "-p", "method:=magic"]) == 2
@@ -261,3 +270,89 @@ def test_the_node_binding_names_bad_input_and_reads_unaligned_ranges():
         assert node_.on_odometry(0.0, [0.5, 0.0, 0.0], [0.0, 0.0, 0.0]) is None
     (ca, sa), (cb, sb) = (n.on_nominal(0.01, [1.0, 0.5, 0.0], [0.0, 0.0, 0.0]) for n in (a, b))
     assert ca == cb and ca[1] < 0.5 and json.loads(sa)["H"] == json.loads(sb)["H"]
+
+
+def test_the_sensor_mount_is_read_from_tf_static(tmp_path):
+    s45 = math.sin(math.pi / 4)
+    chain = [("base_link", "mast", (0.2, 0.0, 0.2), (0.0, 0.0, 0.0, 1.0)), ("mast", "base_laser", (0.1, 0.1, 0.0), (0.0, 0.0, s45, s45))]
+    messages = recording(1.0)
+    static = ("/tf_static", messages[0][1], "tf2_msgs/msg/TFMessage", {"transforms": chain, "t": 0.0})
+    bag = write_bag(tmp_path / "tf", [static, *messages])
+    result = replay(bag)
+    mount = result.summary["mount"]
+    assert mount["source"] == "/tf_static (base_link → base_laser)"
+    np.testing.assert_allclose(mount["xyz_yaw"], [0.3, 0.1, 0.2, math.pi / 2], atol=1e-12)
+    # the same as the mount given as parameters, bit for bit; not the same as no mount
+    params = [a for name, v in zip(("mount_x", "mount_y", "mount_z", "mount_yaw"), mount["xyz_yaw"]) for a in ("-p", f"{name}:={v!r}")]
+    by_params = replay(bag, node_args=params, tf=False)
+    assert by_params.summary["mount"]["source"] == "parameters"
+    np.testing.assert_array_equal(result.table["command"], by_params.table["command"])
+    unmounted = replay(bag, tf=False)
+    assert unmounted.summary["mount"]["xyz_yaw"] == [0.0, 0.0, 0.0, 0.0]
+    assert not np.array_equal(result.table["command"], unmounted.table["command"])
+    # a mount in the parameters wins over /tf_static
+    assert replay(bag, node_args=["-p", "mount_x:=0.5"]).summary["mount"] == {"source": "parameters", "xyz_yaw": [0.5, 0.0, 0.0, 0.0]}
+    # an upside-down LIDAR cannot be a planar mount: a clear error, not a silently mirrored scan
+    flipped = [chain[0], ("mast", "base_laser", (0.1, 0.1, 0.0), (1.0, 0.0, 0.0, 0.0))]
+    bag = write_bag(tmp_path / "flipped", [(*static[:3], {"transforms": flipped, "t": 0.0}), *messages])
+    with pytest.raises(ReplayError, match=r"'base_laser' is tilted 180.0° from 'base_link'.*--no-tf"):
+        replay(bag)
+    assert replay(bag, tf=False).summary["commands"] == 50
+
+
+def test_a_stamped_command_is_written_stamped_in_the_base_frame(tmp_path):
+    from mcap.reader import make_reader
+
+    result = replay(write_bag(tmp_path / "run", recording(0.5)), node_args=["-p", "cmd_stamped:=true", "-p", "base_frame:=chassis"])
+    path = result.write_mcap(tmp_path / "out")
+    with path.open("rb") as f:
+        reader = make_reader(f)
+        assert "geometry_msgs/msg/TwistStamped" in {s.name for s in reader.get_summary().schemas.values()}
+        stamped = [ROS2.deserialize_cdr(m.data, "geometry_msgs/msg/TwistStamped") for _, c, m in reader.iter_messages() if c.topic == OUT_TOPICS["cmd"]]
+    assert [m.header.frame_id for m in stamped] == ["chassis"] * 25
+    assert [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in stamped] == result.table["stamp_ns"].tolist()
+    np.testing.assert_array_equal([[m.twist.linear.x, m.twist.linear.y, m.twist.angular.z] for m in stamped], result.table["command"][:, [0, 1, 5]])
+
+
+def test_a_recording_of_a_simulated_episode_replays_to_the_episodes_own_commands(tmp_path):
+    """The node in the loop of the simulated body (its LIDAR as LaserScan, its achieved velocity
+    as Odometry, a planner pushing sideways and turning at full speed through the constricted
+    passage): no contact, and the recording of the episode replays to its commands bit for bit."""
+    from shieldnav._core import World
+
+    world = World(preset="constricted_passage", seed=3)
+    node = Node(["-p", "method:=braking"])
+    beams = world.ranges.shape[1]
+    scan = {"frame": "laser", "angle_min": 0.0, "angle_increment": float(np.float32(2 * math.pi / beams)),
+            "range_min": float(np.float32(0.1)), "range_max": 20.0}
+    scan["angle_max"] = float(np.float32((beams - 1) * scan["angle_increment"]))
+    t0 = 1_700_000_000_000_000_000
+    messages, sent, velocity, scanned_at, contacts = [], [], [0.0, 0.0, 0.0], None, 0
+    for k in range(600):
+        stamp = t0 + k * 20_000_000
+        if world.scan_time != scanned_at:
+            scanned_at = world.scan_time
+            ranges = world.ranges[0].astype(np.float32)
+            assert node.on_scan((stamp - t0) * 1e-9, "laser", scan["angle_min"], scan["angle_max"], scan["angle_increment"],
+                                scan["range_min"], scan["range_max"], ranges) is None
+            messages.append(("/scan", stamp, "sensor_msgs/msg/LaserScan", {**scan, "ranges": ranges, "t": k * 0.02}))
+        assert node.on_odometry((stamp + 1000 - t0) * 1e-9, [velocity[0], velocity[1], 0.0], [0.0, 0.0, velocity[2]]) is None
+        messages.append(("/odom", stamp + 1000, "nav_msgs/msg/Odometry", {"v": velocity[:2], "w": velocity[2], "t": k * 0.02}))
+        nominal = (1.5, 0.8 * math.sin(0.9 * k * 0.02), 1.5 * math.sin(0.5 * k * 0.02))
+        command, _ = node.on_nominal((stamp + 2000 - t0) * 1e-9, [nominal[0], nominal[1], 0.0], [0.0, 0.0, nominal[2]])
+        messages.append(("/cmd_vel_nominal", stamp + 2000, "geometry_msgs/msg/Twist", {"v": nominal, "t": k * 0.02}))
+        sent.append(command)
+        out = world.step(command[0], command[1], command[5])
+        velocity = list(out["velocity"])
+        contacts += out["contact_count"]
+    sent = np.asarray(sent)
+    assert contacts == 0
+    assert world.true_pose[0] > 2.5, "the robot moves on"
+    assert (np.abs(sent[:, [0, 1, 5]] - 0).sum(axis=1) < 1e-12).any(), "and the shield stops it somewhere"
+    result = replay(write_bag(tmp_path / "episode", messages))
+    np.testing.assert_array_equal(result.table["command"], sent)  # bit for bit
+    assert result.summary["skipped"] == {} and result.summary["scans"] == sum(m[0] == "/scan" for m in messages)
+    # the closest approach: its row, and the scan the node held there
+    k = result.closest["k"]
+    assert k == int(np.nanargmin(result.table["clearance"])) and result.closest["clearance"] == result.table["clearance"][k]
+    assert result.closest["points"].shape[1] == 3 and len(result.closest["points"]) > 100

@@ -215,7 +215,7 @@ def cmd_replay(args: argparse.Namespace) -> None:
         raise ValueError(f"invalid `--out`: {out} exists (the replay writes a new folder)")
     node_args = (["--params", args.params] if args.params else []) + [a for pair in args.param for a in ("-p", pair)]
     topics = {k: getattr(args, k) for k in ("scan", "cloud", "nominal", "odom", "imu") if getattr(args, k)}
-    result = replay(args.bag, node_args, topics, args.start, args.end)
+    result = replay(args.bag, node_args, topics, args.start, args.end, tf=not args.no_tf)
     print(summary_text(result))
     if out is not None:
         out.mkdir(parents=True)
@@ -233,6 +233,9 @@ def cmd_replay(args: argparse.Namespace) -> None:
         written = [out / "table.csv", out / "summary.json", mcap]
         try:
             written.append(result.plot(out / "replay.png"))
+            closest = result.plot_closest(out / "closest.png")
+            if closest is not None:
+                written.append(closest)
         except ImportError:
             print("matplotlib not installed: no replay.png", file=sys.stderr)
         print("wrote " + ", ".join(str(w) for w in written), file=sys.stderr)
@@ -273,7 +276,8 @@ def parser() -> argparse.ArgumentParser:
         y.add_argument(f"--{kind}", default=None, metavar="TOPIC", help=f"the recording's {kind} topic (default: the node's)")
     y.add_argument("--start", type=float, default=None, help="seconds from the recording's start")
     y.add_argument("--end", type=float, default=None, help="seconds from the recording's start")
-    y.add_argument("--out", default=None, help="a new folder for table.csv, summary.json, replay.png and the MCAP of the filtered command")
+    y.add_argument("--no-tf", action="store_true", help="do not take the sensor's mount from the recording's /tf_static")
+    y.add_argument("--out", default=None, help="a new folder for table.csv, summary.json, replay.png, closest.png and the MCAP of the filtered command")
     y.set_defaults(func=cmd_replay)
     return ap
 

@@ -59,11 +59,15 @@ class Replay:
     ``solve_time_us`` (NaN where the node stopped or used no point), the flags ``ok``,
     ``active``, ``feasible``, ``braked``, ``recovering``, ``tight``, ``points_used``,
     ``points_in_scan`` and ``reason``), ``summary`` and the node's ``states`` (the state topic's
-    JSON text a command)."""
+    JSON text a command), the ``body`` the node saw (``Node.body()``: frame, mount, footprint,
+    ellipse) and, at the footprint's ``closest`` approach, its row ``k`` and the scan's points
+    the node held (body frame, ``(n, 3)``; ``None`` when no clearance was measured)."""
 
     table: dict[str, np.ndarray]
     summary: dict[str, Any]
     states: list[str]
+    body: dict[str, Any]
+    closest: dict[str, Any] | None = None
 
     def write_mcap(self, path: str | Path) -> Path:
         """Writes the filtered command (``geometry_msgs/msg/Twist``) and the state
@@ -77,15 +81,57 @@ class Replay:
         if path.exists():
             raise InvalidArgumentError(f"invalid `path`: {path} exists (rosbag2 writes a new folder)")
         store = get_typestore(Stores.ROS2_JAZZY)
-        Twist, Vector3, String = (store.types[t] for t in ("geometry_msgs/msg/Twist", "geometry_msgs/msg/Vector3", "std_msgs/msg/String"))
+        T = store.types
+        Twist, Vector3, String = T["geometry_msgs/msg/Twist"], T["geometry_msgs/msg/Vector3"], T["std_msgs/msg/String"]
+        cmd_type = "geometry_msgs/msg/TwistStamped" if self.summary.get("cmd_stamped") else "geometry_msgs/msg/Twist"
         with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-            cmd = writer.add_connection(OUT_TOPICS["cmd"], "geometry_msgs/msg/Twist", typestore=store)
+            cmd = writer.add_connection(OUT_TOPICS["cmd"], cmd_type, typestore=store)
             state = writer.add_connection(OUT_TOPICS["state"], "std_msgs/msg/String", typestore=store)
             for stamp, c, text in zip(self.table["stamp_ns"].tolist(), self.table["command"], self.states):
-                twist = Twist(linear=Vector3(x=float(c[0]), y=float(c[1]), z=float(c[2])), angular=Vector3(x=float(c[3]), y=float(c[4]), z=float(c[5])))
-                writer.write(cmd, int(stamp), store.serialize_cdr(twist, "geometry_msgs/msg/Twist"))
+                msg = Twist(linear=Vector3(x=float(c[0]), y=float(c[1]), z=float(c[2])), angular=Vector3(x=float(c[3]), y=float(c[4]), z=float(c[5])))
+                if cmd_type.endswith("Stamped"):
+                    sec, nsec = divmod(int(stamp), 10**9)
+                    head = T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec), frame_id=self.body["base_frame"])
+                    msg = T[cmd_type](header=head, twist=msg)
+                writer.write(cmd, int(stamp), store.serialize_cdr(msg, cmd_type))
                 writer.write(state, int(stamp), store.serialize_cdr(String(data=text), "std_msgs/msg/String"))
         return next(path.glob("*.mcap"))
+
+    def plot_closest(self, path: str | Path) -> Path | None:
+        """Top-down, body frame, at the footprint's closest approach: the scan the node held,
+        the footprint and the ellipse, the nominal and the sent velocity; one PNG (``None``
+        when no clearance was measured)."""
+        if self.closest is None:
+            return None
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.patches import Ellipse, Polygon
+
+        k, pts = self.closest["k"], self.closest["points"]
+        fig, ax = plt.subplots(figsize=(7, 7))
+        ax.scatter(pts[:, 0], pts[:, 1], s=3, color="k", label=f"scan ({len(pts)} returns)")
+        ax.add_patch(Polygon(self.body["footprint"], closed=True, fill=False, color="C3", lw=1.5, label="footprint"))
+        axes = self.body["semi_axes"]
+        ax.add_patch(Ellipse((0.0, 0.0), 2 * axes[0], 2 * axes[1], fill=False, color="C0", ls="--", label="ellipse"))
+        for row, color, name in ((self.table["nominal"][k], "0.5", "nominal"), (self.table["command"][k], "C2", "sent")):
+            if np.isfinite(row[:2]).all():
+                ax.arrow(0.0, 0.0, row[0], row[1], width=0.02, color=color, length_includes_head=True, label=f"{name} ({row[0]:.2f}, {row[1]:.2f}) m/s")
+        reach = max(1.5, 1.5 * max(axes))
+        ax.set_xlim(-reach, reach)
+        ax.set_ylim(-reach, reach)
+        ax.set_aspect("equal")
+        ax.grid(alpha=0.3)
+        ax.set_xlabel("x, body frame (m)")
+        ax.set_ylabel("y (m)")
+        ax.legend(loc="upper right", fontsize=8)
+        ax.set_title(f"closest approach: {self.table['clearance'][k]:.3f} m at {self.table['t'][k]:.2f} s ({self.summary['method']})")
+        fig.tight_layout()
+        path = Path(path)
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        return path
 
     def plot(self, path: str | Path) -> Path:
         """Commands (nominal and sent), ``H`` and ``h_min`` and the clearance over time, one PNG."""
@@ -127,30 +173,64 @@ def _reader(paths: Sequence[Path]) -> Any:
     return AnyReader(list(paths), default_typestore=get_typestore(Stores.ROS2_JAZZY))
 
 
+def _remaps(node_args: Sequence[str], topics: Mapping[str, str] | None) -> list[str]:
+    """The node's command line's ``-r`` remaps that read each input from ``topics``."""
+    if not topics:
+        return []
+    unknown = set(topics) - set(TYPES)
+    if unknown:
+        raise InvalidArgumentError(f"invalid `topics`: unknown inputs {sorted(unknown)} (known: {sorted(TYPES)})")
+    current = Node([str(a) for a in node_args]).topics()
+    remaps: list[str] = ["--ros-args"]
+    for kind, topic in topics.items():
+        if not isinstance(topic, str) or not topic.startswith("/"):
+            raise InvalidArgumentError(f"invalid `topics`: {kind} must be a topic name starting with '/', got {topic!r}")
+        if current[kind] is None:
+            raise InvalidArgumentError(f"invalid `topics`: the node's {kind} input is switched off by its parameters")
+        remaps += ["-r", f"{current[kind]}:={topic}"]
+    return remaps
+
+
 def _node(node_args: Sequence[str], topics: Mapping[str, str] | None) -> Node:
     args = [str(a) for a in node_args]
-    node = Node(args)
-    if topics:
-        unknown = set(topics) - set(TYPES)
-        if unknown:
-            raise InvalidArgumentError(f"invalid `topics`: unknown inputs {sorted(unknown)} (known: {sorted(TYPES)})")
-        current = node.topics()
-        remaps: list[str] = []
-        for kind, topic in topics.items():
-            if not isinstance(topic, str) or not topic.startswith("/"):
-                raise InvalidArgumentError(f"invalid `topics`: {kind} must be a topic name starting with '/', got {topic!r}")
-            if current[kind] is None:
-                raise InvalidArgumentError(f"invalid `topics`: the node's {kind} input is switched off by its parameters")
-            remaps += ["-r", f"{current[kind]}:={topic}"]
-        node = Node([*args, "--ros-args", *remaps])
-    return node
+    return Node([*args, *_remaps(args, topics)])
+
+
+def _mounted(reader: Any, node: Node, args: list[str], wanted: dict[str, str]) -> tuple[Node, str]:
+    """The node with the recording's ``/tf_static`` mount where its parameters give none, and
+    where the mount came from."""
+    from shieldnav import tf
+
+    body = node.body()
+    tf_conns = [c for c in reader.connections if c.topic == "/tf_static" and c.msgtype == "tf2_msgs/msg/TFMessage"]
+    sensors = [c for c in reader.connections if (c.topic, c.msgtype) in {(wanted.get("scan"), TYPES["scan"][0]), (wanted.get("cloud"), TYPES["cloud"][0])}]
+    if any(body["mount"]) or not tf_conns or not sensors:
+        return node, "parameters"
+    frame = None
+    for connection, _, raw in reader.messages(connections=sensors):
+        try:
+            frame = reader.deserialize(raw, connection.msgtype).header.frame_id
+        except Exception:  # noqa: BLE001 - an undecodable scan is the run's to count
+            continue
+        break
+    tree = tf.static_tree(reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=tf_conns))
+    try:
+        mount = None if frame is None else tf.mount(tree, body["base_frame"], frame)
+    except tf.TransformError as err:
+        raise ReplayError(f"{err} (set the mount parameters, or replay with tf=False / --no-tf)") from err
+    if mount is None:
+        return node, "parameters"
+    names = ("mount_x", "mount_y", "mount_z", "mount_yaw")
+    return Node([*args, "--ros-args", *(a for n, v in zip(names, mount) for a in ("-p", f"{n}:={v!r}"))]), f"/tf_static ({body['base_frame']} → {frame})"
 
 
 def replay(bag: str | Path, node_args: Sequence[str] = (), topics: Mapping[str, str] | None = None,
-           start: float | None = None, end: float | None = None) -> Replay:
+           start: float | None = None, end: float | None = None, tf: bool = True) -> Replay:
     """Runs the recording ``bag`` through the node (see the module's text). ``topics``:
     the recording's topic for an input (``scan``, ``cloud``, ``nominal``, ``odom``, ``imu``) where
-    it is not the node's. ``start``/``end``: a window in seconds from the recording's start."""
+    it is not the node's. ``start``/``end``: a window in seconds from the recording's start.
+    ``tf``: where the parameters give no mount (``mount_*`` all zero), the sensor's mount is
+    the recording's ``/tf_static`` chain from ``base_frame`` to the first scan's frame."""
     for name, value in (("start", start), ("end", end)):
         if value is not None and not (isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value) and value >= 0):
             raise InvalidArgumentError(f"invalid `{name}`: seconds from the recording's start, finite and ≥ 0, got {value!r}")
@@ -165,7 +245,10 @@ def replay(bag: str | Path, node_args: Sequence[str] = (), topics: Mapping[str, 
 
     try:
         with _reader([path]) as reader:
-            return _run(reader, node, wanted, path, start, end)
+            node, mount_source = _mounted(reader, node, [*node_args, *_remaps(node_args, topics)], wanted) if tf else (node, "parameters")
+            result = _run(reader, node, wanted, path, start, end)
+            result.summary["mount"] = {"source": mount_source, "xyz_yaw": list(result.body["mount"])}
+            return result
     except ShieldnavError:
         raise
     except (AnyReaderError, OSError, EOFError, ValueError, IndexError, KeyError, struct.error) as err:  # the reader's, on a damaged file
@@ -200,6 +283,7 @@ def _run(reader: Any, node: Node, wanted: dict[str, str], path: Path, start: flo
     rows: list[tuple[float, int, np.ndarray, list[float], dict[str, Any]]] = []
     states: list[str] = []
     scans: list[float] = []
+    closest: dict[str, Any] | None = None
     for connection, stamp, raw in reader.messages(connections=connections, start=lo, stop=hi):
         kind = routes[id(connection)]
         t = (stamp - origin) * 1e-9
@@ -238,12 +322,15 @@ def _run(reader: Any, node: Node, wanted: dict[str, str], path: Path, start: flo
             tw = msg.twist if connection.msgtype.endswith("TwistStamped") else msg
             nominal = [tw.linear.x, tw.linear.y, tw.linear.z, tw.angular.x, tw.angular.y, tw.angular.z]
             command, state = node.on_nominal(t, nominal[:3], nominal[3:])
-            rows.append((t, stamp, np.asarray(command), nominal, json.loads(state)))
+            parsed = json.loads(state)
+            if parsed["clearance"] is not None and (closest is None or parsed["clearance"] < closest["clearance"]):
+                closest = {"k": len(rows), "clearance": parsed["clearance"], "points": node.points()}
+            rows.append((t, stamp, np.asarray(command), nominal, parsed))
             states.append(state)
         if rejected is not None:
             skipped[f"{connection.topic}: rejected by the node: {rejected}"] += 1
     table = _table(rows)
-    return Replay(table, _summary(table, path, node, wanted, skipped, scans, origin, reader.end_time), states)
+    return Replay(table, _summary(table, path, node, wanted, skipped, scans, origin, reader.end_time), states, node.body(), closest)
 
 
 def _table(rows: list[tuple[float, int, np.ndarray, list[float], dict[str, Any]]]) -> dict[str, np.ndarray]:
@@ -272,7 +359,8 @@ def _summary(table: dict[str, np.ndarray], path: Path, node: Node, wanted: dict[
     gaps = np.diff(scans) if len(scans) > 1 else np.zeros(0)
     stale = sum(1 for r in table["reason"] if r.startswith("stale scan"))
     return {
-        "bag": path.name, "method": node.method, "topics": wanted, "duration_s": (last - origin) * 1e-9, "commands": int(len(ok)),
+        "bag": path.name, "method": node.method, "topics": wanted, "cmd_stamped": bool(node.topics()["cmd_stamped"]),
+        "duration_s": (last - origin) * 1e-9, "commands": int(len(ok)),
         "changed": int(changed.sum()), "stopped": int((~ok).sum()), "braked": int(table["braked"].sum()), "recovering": int(table["recovering"].sum()),
         "largest_change": float(change[changed].max()) if changed.any() else 0.0,
         "stop_reasons": dict(Counter(r.split(":")[0] for r in table["reason"] if r)),
@@ -289,6 +377,9 @@ def summary_text(result: Replay) -> str:
              f"  changed {s['changed']} ({s['largest_change']:.3f} at most), stopped {s['stopped']}, braked {s['braked']}, recovering {s['recovering']}"]
     if s["closest_clearance_m"] is not None:
         lines.append(f"  closest approach: {s['closest_clearance_m']:.3f} m at {s['closest_at_s']:.2f} s")
+    if "mount" in s:
+        x, y, z, yaw = s["mount"]["xyz_yaw"]
+        lines.append(f"  sensor mount ({x:.3f}, {y:.3f}, {z:.3f}) m, yaw {yaw:.3f} rad, from {s['mount']['source']}")
     lines.append(f"  scans {s['scans']}, longest gap {s['longest_scan_gap_s'] or 0:.3f} s, commands on a stale scan {s['stale_scan_commands']}")
     for reason, count in s["stop_reasons"].items():
         lines.append(f"  stopped: {reason} ({count})")

@@ -4,7 +4,7 @@
 
 use std::time::{Duration, Instant};
 
-use numpy::{PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
+use numpy::{IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use shieldnav_ros2::msg::{Header, Imu, LaserScan, Odometry, PointCloud2, PointField, Time, Twist, Vector3};
@@ -72,7 +72,7 @@ impl PyNode {
     }
 
     /// The topics the node reads and writes (remaps applied; ``None``: switched off) and
-    /// whether the nominal command is a ``TwistStamped``.
+    /// whether the nominal and the sent command are ``TwistStamped``s.
     fn topics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let p = self.node.params();
         let t = &p.topics;
@@ -85,7 +85,29 @@ impl PyNode {
         d.set_item("cmd", t.cmd.clone())?;
         d.set_item("state", t.state.clone())?;
         d.set_item("nominal_stamped", p.nominal_stamped)?;
+        d.set_item("cmd_stamped", p.cmd_stamped)?;
         Ok(d)
+    }
+
+    /// The body as the node sees it: ``base_frame``, the sensor's ``mount`` ``(x, y, z,
+    /// yaw)``, the braking check's ``footprint`` vertices ``[[x, y], ...]`` and the
+    /// ellipse's ``semi_axes`` (m, rad; body frame).
+    fn body<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let p = self.node.params();
+        let d = PyDict::new(py);
+        let m = &p.mount;
+        d.set_item("base_frame", &p.base_frame)?;
+        d.set_item("mount", (m.translation[0], m.translation[1], m.translation[2], m.yaw))?;
+        d.set_item("footprint", p.shield.braking.footprint.vertices().iter().map(|v| [v[0], v[1]]).collect::<Vec<_>>())?;
+        d.set_item("semi_axes", p.shield.semi_axes.clone())?;
+        Ok(d)
+    }
+
+    /// The held scan's returns, body frame, shape ``(n, 3)`` (m; a copy): empty when no scan
+    /// is held or the last was rejected.
+    fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let pts = self.node.points();
+        numpy::ndarray::Array2::from_shape_vec((pts.len() / 3, 3), pts.to_vec()).map(|a| a.into_pyarray(py)).map_err(|e| invalid("points", e.to_string()))
     }
 
     /// The shield's method (``"braking"``, ``"composite"``, ...).

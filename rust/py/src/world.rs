@@ -197,7 +197,8 @@ impl PyWorld {
     }
 
     /// Advances one control period with the body-frame command (m/s, m/s, rad/s). Returns a
-    /// dict: time, scanned, saturated, contact_count, max_penetration.
+    /// dict: time, scanned, saturated, contact_count, max_penetration, and velocity (the
+    /// body-frame `(vx, vy, ω)` the body achieved, what a wheel odometry reports).
     fn step<'py>(&mut self, py: Python<'py>, vx: f64, vy: f64, wz: f64) -> PyResult<Bound<'py, PyDict>> {
         let inner = &mut self.inner;
         let out = py.detach(move || inner.step([vx, vy, wz])).map_err(to_py)?;
@@ -208,6 +209,7 @@ impl PyWorld {
         d.set_item("saturated", out.saturated)?;
         d.set_item("contact_count", out.contacts.count)?;
         d.set_item("max_penetration", out.contacts.max_penetration)?;
+        d.set_item("velocity", out.velocity)?;
         Ok(d)
     }
 

@@ -5,7 +5,8 @@
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
-use shieldnav_core::shield::{BodyState, Scan, Shield, ShieldMethod, ShieldOutcome};
+use shieldnav_core::shield::{BodyState, Motion, Scan, Shield, ShieldMethod, ShieldOutcome};
+use shieldnav_core::world::Pose2;
 
 use crate::msg::{Imu, LaserScan, Odometry, PointCloud2, Twist, Vector3};
 use crate::params::NodeParams;
@@ -45,6 +46,49 @@ impl<T> Held<T> {
 struct ScanInfo {
     frame: String,
     points: usize,
+    /// The body's dead-reckoned pose when the scan arrived.
+    pose: Pose2,
+}
+
+/// The body's pose integrated from its measured velocity (dead reckoning from an arbitrary
+/// origin): what moves the held scan into the body frame of the moment a command is made, as
+/// the robot drives on between scans.
+#[derive(Debug, Clone, Copy, Default)]
+struct Reckoning {
+    pose: Pose2,
+    /// Body-frame `(v_x, v_y, ω)` held since `at`.
+    velocity: [f64; 3],
+    at: Option<Instant>,
+}
+
+impl Reckoning {
+    /// The pose at `now`: the held velocity, a constant body twist, integrated exactly.
+    fn at(&self, now: Instant) -> Pose2 {
+        let Some(at) = self.at else { return self.pose };
+        let dt = now.saturating_duration_since(at).as_secs_f64();
+        let [vx, vy, w] = self.velocity;
+        let turn = w * dt;
+        let (dx, dy) = if turn.abs() < 1e-9 {
+            (vx * dt, vy * dt)
+        } else {
+            let (s, c) = turn.sin_cos();
+            ((s * vx - (1.0 - c) * vy) / w, ((1.0 - c) * vx + s * vy) / w)
+        };
+        self.pose.compose(&Pose2::new(dx, dy, turn))
+    }
+
+    /// Holds a new velocity from `now` on (`None` keeps that component).
+    fn update(&mut self, now: Instant, linear: Option<[f64; 2]>, yaw_rate: Option<f64>) {
+        self.pose = self.at(now);
+        self.at = Some(now);
+        if let Some([vx, vy]) = linear {
+            self.velocity[0] = vx;
+            self.velocity[1] = vy;
+        }
+        if let Some(w) = yaw_rate {
+            self.velocity[2] = w;
+        }
+    }
 }
 
 /// The state topic's content (`std_msgs/String`, this as one JSON object).
@@ -119,18 +163,35 @@ pub struct ShieldNode {
     /// Angular velocity from the IMU.
     imu_omega: Held<[f64; 3]>,
     nominal: Held<Twist>,
+    reckoning: Reckoning,
 }
 
 impl ShieldNode {
     /// A node with checked parameters (see [`crate::params::RawParams::build`]).
     pub fn new(params: NodeParams) -> Result<Self, shieldnav_core::Error> {
         let shield = Shield::new(params.shield.clone())?;
-        Ok(Self { params, shield, points: Vec::new(), beams: BeamTable::default(), scan: Held::Missing, velocity: Held::Missing, imu_omega: Held::Missing, nominal: Held::Missing })
+        Ok(Self {
+            params,
+            shield,
+            points: Vec::new(),
+            beams: BeamTable::default(),
+            scan: Held::Missing,
+            velocity: Held::Missing,
+            imu_omega: Held::Missing,
+            nominal: Held::Missing,
+            reckoning: Reckoning::default(),
+        })
     }
 
     /// The parameters.
     pub fn params(&self) -> &NodeParams {
         &self.params
+    }
+
+    /// The held scan's returns as body-frame `(x, y, z)` rows (stride 3), before the shield's
+    /// crop; empty when no scan is held or the last was rejected.
+    pub fn points(&self) -> &[f64] {
+        &self.points
     }
 
     fn check_frame(&self, frame: &str) -> Result<(), Rejection> {
@@ -145,14 +206,14 @@ impl ShieldNode {
     pub fn on_scan(&mut self, msg: &LaserScan, now: Instant) -> Result<(), Rejection> {
         self.points.clear();
         let r = self.check_frame(&msg.header.frame_id).and_then(|_| self.check_invalid(msg)).and_then(|_| laser_scan_points_with(msg, &self.params.mount, &mut self.beams, &mut self.points));
-        self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n }), now)
+        self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n, pose: self.reckoning.at(now) }), now)
     }
 
     /// Takes a point cloud that arrived at `now` (as [`ShieldNode::on_scan`]).
     pub fn on_cloud(&mut self, msg: &PointCloud2, now: Instant) -> Result<(), Rejection> {
         self.points.clear();
         let r = self.check_frame(&msg.header.frame_id).and_then(|_| point_cloud_points(msg, &self.params.mount, &mut self.points));
-        self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n }), now)
+        self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n, pose: self.reckoning.at(now) }), now)
     }
 
     /// A scan mostly of NaN ranges (invalid measurements, REP 117) is a blinded sensor, not
@@ -197,6 +258,8 @@ impl ShieldNode {
         }
         let v = |x: &Vector3| [x.x, x.y, x.z];
         self.velocity = Held::Valid((v(&t.linear), v(&t.angular)), now);
+        let yaw_rate = self.params.topics.imu.is_none().then_some(t.angular.z);
+        self.reckoning.update(now, Some([t.linear.x, t.linear.y]), yaw_rate);
         Ok(())
     }
 
@@ -210,6 +273,7 @@ impl ShieldNode {
             return Err(reason);
         }
         self.imu_omega = Held::Valid(w, now);
+        self.reckoning.update(now, None, Some(w[2]));
         Ok(())
     }
 
@@ -296,7 +360,8 @@ impl ShieldNode {
         };
         self.scan.fresh("scan", now, p.scan_timeout)?;
         let method = p.shield.method;
-        // the measured motion: odometry if configured, the IMU's ω if configured, else at rest
+        // the measured motion: odometry if configured, the IMU's ω (over odometry's) if
+        // configured, else at rest
         let velocity = match p.topics.odom {
             Some(_) => Some(*self.velocity.fresh("odometry", now, p.odom_timeout)?),
             None => None,
@@ -311,8 +376,10 @@ impl ShieldNode {
         let u_nom = &n[..dim];
         let state = if dim == 2 {
             if method == ShieldMethod::Braking {
+                // the translation from odometry, the yaw rate from the IMU where one is set
                 let (v, w) = velocity.ok_or("the braking shield needs odometry")?;
-                BodyState::planar(0.0, nominal.angular.z).and_then(|s| s.with_velocity([v[0], v[1], w[2]]))
+                let wz = imu.map_or(w[2], |i| i[2]);
+                BodyState::planar(0.0, nominal.angular.z).and_then(|s| s.with_velocity([v[0], v[1], wz]))
             } else {
                 BodyState::planar(0.0, omega_measured[2])
             }
@@ -322,7 +389,14 @@ impl ShieldNode {
             BodyState::spatial(eye, omega)
         }
         .map_err(|e| format!("body state: {e}"))?;
-        let scan = Scan::new_f64(&self.points, 3).map_err(|e| format!("scan: {e}"))?;
+        let mut scan = Scan::new_f64(&self.points, 3).map_err(|e| format!("scan: {e}"))?;
+        if dim == 2 {
+            // the scan moved into the body frame of now by the motion measured since it arrived
+            let rel = self.reckoning.at(now).between(&info.pose);
+            if rel != Pose2::default() {
+                scan = scan.moved(Motion::planar(rel.yaw, rel.x, rel.y));
+            }
+        }
         let out: ShieldOutcome = self.shield.filter(&scan, &state, u_nom).map_err(|e| format!("shield: {e}"))?;
         // the planar braking shield's command passed its braking check whatever the row said
         let checked = method == ShieldMethod::Braking && dim == 2;

@@ -99,8 +99,10 @@ pub const PARAMETERS: &[(&str, &str)] = &[
     ("nominal_topic", "nominal geometry_msgs/Twist in (default /cmd_vel_nominal)"),
     ("nominal_stamped", "the nominal command is a geometry_msgs/TwistStamped (default false)"),
     ("odom_topic", "nav_msgs/Odometry in: body velocity and ω; empty: none (default /odom)"),
-    ("imu_topic", "sensor_msgs/Imu in: ω only; empty: none (default empty)"),
+    ("imu_topic", "sensor_msgs/Imu in: its angular velocity replaces odometry's (the translation stays odometry's); empty: none (default empty)"),
     ("cmd_topic", "filtered geometry_msgs/Twist out (default /cmd_vel)"),
+    ("cmd_stamped", "the filtered command is a geometry_msgs/TwistStamped in base_frame, stamped as the stamped nominal command it answers, else at sending (default false)"),
+    ("base_frame", "the body's frame: the stamped command's frame_id, and the frame a recording's /tf_static mounts the sensor on (default base_link)"),
     ("state_topic", "std_msgs/String out, one JSON object per command (default /shieldnav/state)"),
     ("scan_timeout", "a scan older than this stops the robot, s (default 0.5)"),
     ("command_timeout", "a nominal command older than this stops the robot, s (default 0.5)"),
@@ -129,6 +131,10 @@ pub struct NodeParams {
     pub topics: Topics,
     /// The nominal command is a `TwistStamped`.
     pub nominal_stamped: bool,
+    /// The filtered command is a `TwistStamped`.
+    pub cmd_stamped: bool,
+    /// The body's frame (the stamped command's `frame_id`).
+    pub base_frame: String,
     /// A scan older than this stops the robot.
     pub scan_timeout: Duration,
     /// A nominal command older than this stops the robot.
@@ -378,6 +384,10 @@ impl RawParams {
             return Err(ParamError::new("domain_id", format!("must be from 0 to 232, got {domain}")));
         }
         let sensor_frame = g.string("sensor_frame", "")?;
+        let base_frame = g.string("base_frame", "base_link")?;
+        if base_frame.is_empty() || base_frame.contains(char::is_whitespace) {
+            return Err(ParamError::new("base_frame", format!("{base_frame:?} is not a frame name")));
+        }
         let max_invalid_fraction = g.float("max_invalid_fraction", 0.9)?;
         if !(0.0..=1.0).contains(&max_invalid_fraction) {
             return Err(ParamError::new("max_invalid_fraction", format!("must be from 0 to 1, got {max_invalid_fraction}")));
@@ -388,6 +398,8 @@ impl RawParams {
             stop_when_infeasible: g.bool("stop_when_infeasible", true)?,
             topics,
             nominal_stamped: g.bool("nominal_stamped", false)?,
+            cmd_stamped: g.bool("cmd_stamped", false)?,
+            base_frame,
             scan_timeout: seconds("scan_timeout", 0.5)?,
             command_timeout: seconds("command_timeout", 0.5)?,
             odom_timeout: seconds("odom_timeout", 0.5)?,

@@ -14,7 +14,7 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use crate::logic::{Output, ShieldNode};
-use crate::msg::{Imu, LaserScan, Odometry, PointCloud2, StringMsg, Twist, TwistStamped};
+use crate::msg::{Header, Imu, LaserScan, Odometry, PointCloud2, StringMsg, Time, Twist, TwistStamped};
 use crate::params::NodeParams;
 
 /// The QoS of the sensor and odometry subscriptions: best effort, newest only (matches both
@@ -55,6 +55,26 @@ pub fn subscribe<M: DeserializeOwned + 'static>(node: &mut Node, name: &str, pac
 pub fn advertise<M: Serialize>(node: &mut Node, name: &str, package: &str, type_name: &str, qos: QosProfile) -> Result<Publisher<M>, String> {
     let t = topic(node, name, package, type_name, &qos)?;
     node.create_publisher(&t, Some(qos)).map_err(|e| format!("publisher on {name:?}: {e:?}"))
+}
+
+/// The filtered command's publisher: `Twist`, or `TwistStamped` in the body's frame.
+enum CommandOut {
+    Plain(Publisher<Twist>),
+    Stamped(Publisher<TwistStamped>, String),
+}
+
+impl CommandOut {
+    /// Publishes `twist`; a stamped command carries `stamp` (the stamped nominal command's it
+    /// answers), else the time of sending.
+    fn publish(&self, twist: Twist, stamp: Option<Time>) -> Result<(), String> {
+        match self {
+            CommandOut::Plain(p) => p.publish(twist).map_err(|e| format!("{e:?}")),
+            CommandOut::Stamped(p, frame) => {
+                let header = Header { stamp: stamp.unwrap_or_else(Time::now), frame_id: frame.clone() };
+                p.publish(TwistStamped { header, twist }).map_err(|e| format!("{e:?}"))
+            }
+        }
+    }
 }
 
 /// The running node: stop it with [`RunningNode::stop`] (or let it run; dropping the
@@ -158,7 +178,11 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
         } else {
             (Some(subscribe(&mut node, &t.nominal, "geometry_msgs", "Twist", command_in_qos())?), None)
         };
-        let cmd: Publisher<Twist> = advertise(&mut node, &t.cmd, "geometry_msgs", "Twist", command_out_qos())?;
+        let cmd = if params.cmd_stamped {
+            CommandOut::Stamped(advertise(&mut node, &t.cmd, "geometry_msgs", "TwistStamped", command_out_qos())?, params.base_frame.clone())
+        } else {
+            CommandOut::Plain(advertise(&mut node, &t.cmd, "geometry_msgs", "Twist", command_out_qos())?)
+        };
         let state: Publisher<StringMsg> = advertise(&mut node, &t.state, "std_msgs", "String", command_out_qos())?;
         let spinner = node.spinner().map_err(|e| format!("cannot start the node's spinner: {e:?}"))?;
         let shield = ShieldNode::new(params.clone()).map_err(|e| format!("shield: {e}"))?;
@@ -202,14 +226,14 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
         .map_err(|e| format!("cannot start the spinner: {e}"))?;
 
     let mut quiet = Quiet::default();
-    let publish = |out: Output, quiet: &mut Quiet| {
+    let publish = |out: Output, stamp: Option<Time>, quiet: &mut Quiet| {
         if let Some(r) = &out.state.reason {
             quiet.note(&format!("zero command: {r}"));
         } else {
             quiet.note("filtering");
         }
-        if let Err(e) = cmd.publish(out.command) {
-            quiet.note(&format!("cannot publish the command: {e:?}"));
+        if let Err(e) = cmd.publish(out.command, stamp) {
+            quiet.note(&format!("cannot publish the command: {e}"));
         }
         let _ = state.publish(StringMsg { data: out.state.to_json() });
     };
@@ -227,7 +251,7 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                         shield.reject_scan(e.clone());
                         quiet.note(&format!("scan rejected: {e}"));
                     }
-                    if params.filter_on_scan { publish(shield.command(now), &mut quiet) }
+                    if params.filter_on_scan { publish(shield.command(now), None, &mut quiet) }
                 }
                 r = cloud_s.select_next_some() => {
                     let now = Instant::now();
@@ -236,7 +260,7 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                         shield.reject_scan(e.clone());
                         quiet.note(&format!("cloud rejected: {e}"));
                     }
-                    if params.filter_on_scan { publish(shield.command(now), &mut quiet) }
+                    if params.filter_on_scan { publish(shield.command(now), None, &mut quiet) }
                 }
                 r = odom_s.select_next_some() => {
                     let r = r.map_err(|e| format!("Odometry not decodable: {e}")).and_then(|(m, _)| shield.on_odometry(&m, Instant::now()));
@@ -258,18 +282,18 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                         Ok((m, _)) => shield.on_nominal(&m, now),
                         Err(e) => shield.reject_nominal(format!("nominal Twist not decodable: {e}"), now),
                     };
-                    publish(out, &mut quiet);
+                    publish(out, None, &mut quiet);
                 }
                 r = stamped_s.select_next_some() => {
                     let now = Instant::now();
-                    let out = match r {
-                        Ok((m, _)) => shield.on_nominal(&m.twist, now),
-                        Err(e) => shield.reject_nominal(format!("nominal TwistStamped not decodable: {e}"), now),
+                    let (out, stamp) = match r {
+                        Ok((m, _)) => (shield.on_nominal(&m.twist, now), Some(m.header.stamp)),
+                        Err(e) => (shield.reject_nominal(format!("nominal TwistStamped not decodable: {e}"), now), None),
                     };
-                    publish(out, &mut quiet);
+                    publish(out, stamp, &mut quiet);
                 }
                 _ = ticks.select_next_some() => {
-                    if let Some(out) = shield.tick(Instant::now()) { publish(out, &mut quiet) }
+                    if let Some(out) = shield.tick(Instant::now()) { publish(out, None, &mut quiet) }
                 }
                 _ = stop => break,
             }
@@ -277,7 +301,7 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
     };
     futures::executor::block_on(main);
     // a last zero command: the robot is not left with the last filtered one
-    let _ = cmd.publish(Twist::default());
+    let _ = cmd.publish(Twist::default(), None);
     node.stop_spinner();
     drop(node);
     drop(ctx);

@@ -317,6 +317,7 @@ fn the_example_parameter_file_holds_the_defaults() {
     assert_eq!(p.topics, d.topics);
     assert_eq!((p.scan_timeout, p.command_timeout, p.odom_timeout, p.watchdog_period), (d.scan_timeout, d.command_timeout, d.odom_timeout, d.watchdog_period));
     assert_eq!(p.mount, d.mount);
+    assert_eq!((p.cmd_stamped, &p.base_frame), (d.cmd_stamped, &d.base_frame));
 }
 
 /// A 1024-beam scan from `x` on the axis of a corridor 2 m wide, closed 6 m ahead of the start
@@ -406,4 +407,66 @@ fn the_footprint_is_read_in_nav2s_convention_and_decides_what_passes() {
     let mut short = ShieldNode::new(raw.build().unwrap()).unwrap();
     let out = step(&mut short, &wall_scan(0.58), &forward(1.0), Instant::now());
     assert!(out.state.ok && out.command.linear.x > 0.0, "{:?}", out.command);
+}
+
+#[test]
+fn an_imus_yaw_rate_replaces_odometrys_and_the_translation_stays_odometrys() {
+    use shieldnav_ros2::msg::{Imu, Vector3};
+    let moving = |wz: f64| {
+        let mut o = Odometry::default();
+        o.twist.twist.linear.x = 0.8;
+        o.twist.twist.angular.z = wz;
+        o
+    };
+    let answer = |imu: Option<f64>, odom_wz: f64| {
+        let mut raw = RawParams::default();
+        if imu.is_some() {
+            raw.set("imu_topic", Value::Str("/imu".into()));
+        }
+        let mut n = ShieldNode::new(raw.build().unwrap()).unwrap();
+        let t = Instant::now();
+        // a wall along the left side, 0.12 m off the body's flank
+        let side = ring_scan(30.0, |a| if a.sin() > 0.05 { (0.37 / a.sin()).min(1e3) as f32 } else { f32::INFINITY });
+        n.on_scan(&side, t).unwrap();
+        n.on_odometry(&moving(odom_wz), t).unwrap();
+        if let Some(wz) = imu {
+            n.on_imu(&Imu { angular_velocity: Vector3 { x: 0.0, y: 0.0, z: wz }, ..Default::default() }, t).unwrap();
+        }
+        let out = n.on_nominal(&forward(1.0), t);
+        assert!(out.state.ok, "{:?}", out.state);
+        out.command
+    };
+    let with_imu = answer(Some(1.4), 0.0);
+    assert_eq!(with_imu, answer(None, 1.4), "the IMU's yaw rate is the one the braking check takes");
+    assert_ne!(with_imu, answer(None, 0.0), "the yaw rate changes the command here (the test can tell)");
+}
+
+#[test]
+fn the_held_scan_is_moved_by_the_odometry_since_it_arrived() {
+    // h_min, the nearest point's barrier: the scans' beams fall elsewhere on the moved wall
+    let h = |out: &Output| out.state.h_min.unwrap_or_else(|| panic!("no h_min: {:?}", out.state));
+    let at_rest = |scan: &LaserScan| {
+        let mut n = node("composite");
+        h(&step(&mut n, scan, &forward(0.2), Instant::now()))
+    };
+    let t0 = Instant::now();
+    // 0.3 s at 1 m/s: the wall 1.5 m ahead when the scan arrived is 1.2 m ahead
+    let mut n = node("composite");
+    let mut odom = Odometry::default();
+    odom.twist.twist.linear.x = 1.0;
+    n.on_odometry(&odom, t0).unwrap();
+    n.on_scan(&wall_scan(1.5), t0).unwrap();
+    n.on_odometry(&odom, t0 + Duration::from_millis(200)).unwrap();
+    let moved = h(&n.on_nominal(&forward(0.2), t0 + Duration::from_millis(300)));
+    let (near, far) = (at_rest(&wall_scan(1.2)), at_rest(&wall_scan(1.5)));
+    assert!((moved - near).abs() < 1e-3 * (far - near).abs(), "h_min {moved}: the wall at 1.2 m gives {near}, at 1.5 m {far}");
+    // turning at 0.5 rad/s for 0.4 s: the wall is turned by −0.2 rad about the body
+    let mut n = node("composite");
+    let mut turning = Odometry::default();
+    turning.twist.twist.angular.z = 0.5;
+    n.on_odometry(&turning, t0).unwrap();
+    n.on_scan(&wall_scan(1.5), t0).unwrap();
+    let moved = h(&n.on_nominal(&forward(0.2), t0 + Duration::from_millis(400)));
+    let turned = at_rest(&ring_scan(30.0, |a| if (a + 0.2).cos() > 0.05 { (1.5 / (a + 0.2).cos()).min(1e3) as f32 } else { f32::INFINITY }));
+    assert!((moved - turned).abs() < 0.02 * (far - turned).abs(), "h_min {moved}: the turned wall gives {turned}, the wall as scanned {far}");
 }

@@ -217,3 +217,57 @@ fn the_node_over_loopback_dds() {
     drop(fake);
     node.stop().expect("the node stops cleanly");
 }
+
+#[test]
+fn stamped_commands_in_and_out_over_loopback_dds() {
+    use shieldnav_ros2::msg::{Time, TwistStamped};
+    let domain = 1 + (std::process::id() % 99) as i64;
+    let mut raw = RawParams::default();
+    raw.set("domain_id", Value::Int(domain)).set("nominal_stamped", Value::Bool(true)).set("cmd_stamped", Value::Bool(true));
+    raw.set("base_frame", Value::Str("chassis".into())).set("watchdog_rate", Value::Float(20.0));
+    let node = spawn(raw.build().expect("parameters")).expect("the node starts");
+
+    let ctx = context(domain as u16).expect("participant");
+    let mut n = ctx.new_node(NodeName::new("/", "fake_planner").unwrap(), NodeOptions::new().enable_rosout(false)).expect("node");
+    let scan: Publisher<LaserScan> = advertise(&mut n, "/scan", "sensor_msgs", "LaserScan", sensor_qos()).unwrap();
+    let odom: Publisher<Odometry> = advertise(&mut n, "/odom", "nav_msgs", "Odometry", sensor_qos()).unwrap();
+    let nominal: Publisher<TwistStamped> = advertise(&mut n, "/cmd_vel_nominal", "geometry_msgs", "TwistStamped", command_out_qos()).unwrap();
+    let cmd: Subscription<TwistStamped> = subscribe(&mut n, "/cmd_vel", "geometry_msgs", "TwistStamped", command_out_qos()).unwrap();
+    let stamp = Time { sec: 42, nanosec: 7 };
+    let planned = TwistStamped { header: Header { stamp, frame_id: "base_link".into() }, twist: forward(0.5) };
+    let free = wall_scan(50.0);
+
+    // the answer to a stamped nominal command carries its stamp, in the body's frame
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let mut answer = None;
+    while answer.is_none() && Instant::now() < deadline {
+        let _ = scan.publish(free.clone());
+        let _ = odom.publish(Odometry::default());
+        let _ = nominal.publish(planned.clone());
+        std::thread::sleep(Duration::from_millis(20));
+        while let Ok(Some((c, _))) = cmd.take() {
+            if c.header.stamp == stamp && c.twist.linear.x > 0.0 {
+                answer = Some(c);
+            }
+        }
+    }
+    let c = answer.expect("a stamped command answering the stamped nominal one within 60 s");
+    assert_eq!(c.header.frame_id, "chassis");
+    assert!((c.twist.linear.x - 0.5).abs() < 1e-9, "{c:?}");
+
+    // the planner goes quiet: the watchdog's zero commands are stamped at sending
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let mut zero = None;
+    while zero.is_none() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+        while let Ok(Some((c, _))) = cmd.take() {
+            if c.header.stamp != stamp {
+                zero = Some(c);
+            }
+        }
+    }
+    let z = zero.expect("a zero command from the watchdog within 20 s");
+    assert_eq!(z.twist, Twist::default());
+    assert!(z.header.stamp.sec > 1_600_000_000 && z.header.frame_id == "chassis", "{z:?}");
+    node.stop().expect("the node stops cleanly");
+}
