@@ -16,6 +16,11 @@ Attackers:
 - ``ppo``: a PPO policy trained under the shield to touch things (``--train-attacker``: a
   reward for contact and for low clearance), evaluated with ``--attacker-model``.
 
+Shields: the environment's (``braking``, ``composite``, the baselines, ``none``), and ``node``:
+the ROS 2 node's decisions in the loop of the simulated body (``agents.node_shield``: the
+LIDAR as ``LaserScan`` at its rate, the body's velocity as ``Odometry``, the node's braking
+shield with the body's model), one environment after another.
+
 Sites: procedural office sites, the paper's static scenarios and every ROS map in
 ``--maps`` (default ``../shared/maps`` beside the repository); tight spaces (``agents.tight``:
 the robot started in aisles, L-shaped aisles and doorways 0.60–0.90 m wide, narrower than
@@ -32,6 +37,7 @@ already stands, but it must not drive into it.
     python -m agents.redteam --movers --attackers held seeker cruise   # the mover sites only
     python -m agents.redteam --movers --set track_movers=False         # every return taken as static
     python -m agents.redteam --shields braking --attackers held --episodes 64
+    python -m agents.redteam --shields node --tight --episodes 300   # the ROS 2 node's decisions
     python -m agents.redteam --train-attacker --timesteps 300000 --out results/redteam
     python -m agents.redteam --attackers ppo --attacker-model results/redteam/attacker.zip
     python -m agents.redteam --backend ray [--ray-address auto]
@@ -161,6 +167,15 @@ class Attacker:
         return np.concatenate([d, w[:, None]], axis=1)
 
 
+def node_vector_env(env_id: str, n: int, **kwargs: Any) -> gym.vector.VectorEnv:
+    """``n`` environments, each with the ROS 2 node's decisions in place of its shield
+    (``agents.node_shield``), stepped one after the other."""
+    from agents.node_shield import NodeShield
+
+    return gym.vector.SyncVectorEnv([lambda: NodeShield(gym.make(env_id, shield="none", **kwargs)) for _ in range(n)],
+                                    autoreset_mode=gym.vector.AutoresetMode.SAME_STEP)
+
+
 def run_cell(task: dict[str, Any]) -> dict[str, Any]:
     """``episodes`` episodes of one attacker against one shield on one site, in one native
     vector environment; returns the totals and the per-episode figures."""
@@ -168,10 +183,13 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
     kwargs = dict(task["kwargs"])
     if task.get("scenario") is not None:  # (written where the cell runs: a Ray worker may be elsewhere)
         kwargs["scenario_path"] = scenario_file(task["scenario"])
-    env = gym.make_vec(
-        task["env_id"], num_envs=n, vectorization_mode="vector_entry_point", autoreset_mode="same_step",
-        time_limit=task["steps"], terminate_at_goal=False, shield=task["shield"], threads=task["threads"], **kwargs,
-    )
+    if task["shield"] == "node":
+        env = node_vector_env(task["env_id"], n, time_limit=task["steps"], terminate_at_goal=False, **kwargs)
+    else:
+        env = gym.make_vec(
+            task["env_id"], num_envs=n, vectorization_mode="vector_entry_point", autoreset_mode="same_step",
+            time_limit=task["steps"], terminate_at_goal=False, shield=task["shield"], threads=task["threads"], **kwargs,
+        )
     attacker = Attacker(task["attacker"], n, task["seed"], task.get("model"))
     obs, _ = env.reset(seed=task["seed"])
     episodes: list[dict[str, float]] = []
@@ -185,7 +203,8 @@ def run_cell(task: dict[str, Any]) -> dict[str, Any]:
             ended = final["shieldnav_episode"]
             for i in np.flatnonzero(ended["_contact_steps"]):
                 episodes.append({k: float(ended[k][i]) for k in EPISODE_KEYS})
-    settings = {k: env.config[k] for k in task.get("set", {})}  # as the environment took them
+    config = env.get_attr("config")[0] if task["shield"] == "node" else env.config
+    settings = {k: config[k] for k in task.get("set", {})}  # as the environment took them
     env.close()
     episodes = episodes[: task["episodes"]]
     contact = [e["contact_steps"] for e in episodes]
@@ -280,7 +299,7 @@ def table(results: list[dict[str, Any]]) -> str:
 
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap = argparse.ArgumentParser(prog="python -m agents.redteam", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--shields", nargs="+", default=SHIELDS, choices=["braking", "composite", "distance", "hardmin", "none"])
+    ap.add_argument("--shields", nargs="+", default=SHIELDS, choices=["braking", "composite", "distance", "hardmin", "none", "node"])
     ap.add_argument("--attackers", nargs="+", default=["held", "seeker", "skimmer"], choices=ATTACKERS)
     ap.add_argument("--episodes", type=positive_int, default=10_000,
                     help="episodes per shield over the static worlds, and again over the tight spaces (split over sites and attackers)")

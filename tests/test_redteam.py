@@ -82,3 +82,27 @@ def test_red_team_refuses_a_bad_set_before_any_cell(setting, name, tmp_path, cap
     err = capsys.readouterr().err
     assert f"`{name}`" in err or f"--set: {name}" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_node_in_the_loop_keeps_off_the_walls_in_the_tight_spaces(tmp_path):
+    """The ROS 2 node's decisions driving the simulated body (its LIDAR as LaserScan at 10 Hz,
+    its velocity as Odometry) against two scripted attackers, one episode each per tight site
+    (on the scan as it arrived, not moved by the odometry since, they bring it into contact)."""
+    results = redteam.main(["--tight", "--shields", "node", "--attackers", "held", "skimmer", "--episodes", "54", "--num-envs", "1",
+                            "--steps", "750", "--set", "lidar_noise_std=0.02", "--out", str(tmp_path)])
+    assert len(results) == 54 and all(r["shield"] == "node" and r["set"] == {"lidar_noise_std": 0.02} for r in results)
+    assert sum(r["contact_steps"] for r in results) == 0
+    assert min(r["least_clearance"] for r in results) > 0.0
+    # the robot is not frozen: the node lets it move in most of them
+    assert sum(r["braked_steps"] for r in results) < sum(r["steps"] for r in results)
+
+
+def test_the_node_wrapper_names_what_it_cannot_run():
+    from shieldnav.exceptions import InvalidArgumentError
+
+    from agents.node_shield import NodeShield
+
+    with pytest.raises(InvalidArgumentError, match="shield='none'"):
+        NodeShield(gym.make(redteam.TIGHT_ID))
+    with pytest.raises(InvalidArgumentError, match="16 channels"):
+        NodeShield(gym.make(redteam.TIGHT_ID, shield="none", lidar_channels=16, lidar_columns=512))

@@ -17,6 +17,7 @@ use crate::errors::{invalid, to_py};
 type Step<'py> = (Bound<'py, PyArray1<f32>>, f64, bool, bool, Bound<'py, PyDict>);
 /// What `Episode.scan_points` returns: the points and their validity mask.
 type ScanPoints<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<i8>>);
+type ScanRanges<'py> = (Bound<'py, PyArray2<f64>>, f64, (f64, f64, f64, f64));
 
 fn pose_tuple(p: Pose2) -> (f64, f64, f64) {
     (p.x, p.y, p.yaw)
@@ -195,6 +196,16 @@ impl PyEpisode {
             }
         }
         Ok((pts, valid))
+    }
+
+    /// The latest scan as its sensor measured it: ranges, float64 `(channels, columns)` (m;
+    /// `inf` where there is no return; column `i` at azimuth `2π i / columns` in the sensor
+    /// frame), its time (s), and the sensor's mount `(x, y, z, yaw)` on the body.
+    fn scan_ranges<'py>(&self, py: Python<'py>) -> PyResult<ScanRanges<'py>> {
+        let scan = self.inner.world().scan();
+        let m = self.inner.config().world.lidar.mount;
+        let ranges = PyArray1::from_slice(py, &scan.ranges).reshape([scan.channels, scan.columns])?;
+        Ok((ranges, scan.stamp, (m.x, m.y, m.z, m.yaw)))
     }
 
     /// The latest scan's valid returns in the current body frame, float64 (n, 3).
