@@ -17,6 +17,8 @@ pub mod logic;
 pub mod msg;
 pub mod params;
 #[cfg(feature = "dds")]
+pub mod record;
+#[cfg(feature = "dds")]
 pub mod ros;
 pub mod translate;
 

@@ -115,6 +115,7 @@ pub const PARAMETERS: &[(&str, &str)] = &[
     ("mount_y", "sensor position in the body frame, m (default 0)"),
     ("mount_z", "sensor height in the body frame, m (default 0)"),
     ("mount_yaw", "sensor yaw in the body frame, rad (default 0)"),
+    ("record", "write every nominal command heard, command sent and state to this new MCAP file (ros2 profile); empty: off (default empty)"),
     ("domain_id", "DDS domain (default: $ROS_DOMAIN_ID, else 0)"),
 ];
 
@@ -153,6 +154,8 @@ pub struct NodeParams {
     pub mount: Mount,
     /// DDS domain.
     pub domain_id: u16,
+    /// The MCAP file the node records to; `None` when off.
+    pub record: Option<std::path::PathBuf>,
 }
 
 /// The node's topics.
@@ -409,6 +412,7 @@ impl RawParams {
             max_invalid_fraction,
             mount,
             domain_id: domain as u16,
+            record: Some(g.string("record", "")?).filter(|r| !r.is_empty()).map(std::path::PathBuf::from),
         })
     }
 }

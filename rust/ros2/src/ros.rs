@@ -16,6 +16,7 @@ use serde::Serialize;
 use crate::logic::{Output, ShieldNode};
 use crate::msg::{Header, Imu, LaserScan, Odometry, PointCloud2, StringMsg, Time, Twist, TwistStamped};
 use crate::params::NodeParams;
+use crate::record::{now_ns, Recorder};
 
 /// The QoS of the sensor and odometry subscriptions: best effort, newest only (matches both
 /// best-effort "sensor data" and reliable publishers).
@@ -57,22 +58,18 @@ pub fn advertise<M: Serialize>(node: &mut Node, name: &str, package: &str, type_
     node.create_publisher(&t, Some(qos)).map_err(|e| format!("publisher on {name:?}: {e:?}"))
 }
 
-/// The filtered command's publisher: `Twist`, or `TwistStamped` in the body's frame.
+/// The filtered command's publisher: `Twist`, or `TwistStamped`.
 enum CommandOut {
     Plain(Publisher<Twist>),
-    Stamped(Publisher<TwistStamped>, String),
+    Stamped(Publisher<TwistStamped>),
 }
 
 impl CommandOut {
-    /// Publishes `twist`; a stamped command carries `stamp` (the stamped nominal command's it
-    /// answers), else the time of sending.
-    fn publish(&self, twist: Twist, stamp: Option<Time>) -> Result<(), String> {
+    /// Publishes `twist` (a stamped command with `header`).
+    fn publish(&self, twist: Twist, header: Header) -> Result<(), String> {
         match self {
             CommandOut::Plain(p) => p.publish(twist).map_err(|e| format!("{e:?}")),
-            CommandOut::Stamped(p, frame) => {
-                let header = Header { stamp: stamp.unwrap_or_else(Time::now), frame_id: frame.clone() };
-                p.publish(TwistStamped { header, twist }).map_err(|e| format!("{e:?}"))
-            }
+            CommandOut::Stamped(p) => p.publish(TwistStamped { header, twist }).map_err(|e| format!("{e:?}")),
         }
     }
 }
@@ -179,16 +176,17 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
             (Some(subscribe(&mut node, &t.nominal, "geometry_msgs", "Twist", command_in_qos())?), None)
         };
         let cmd = if params.cmd_stamped {
-            CommandOut::Stamped(advertise(&mut node, &t.cmd, "geometry_msgs", "TwistStamped", command_out_qos())?, params.base_frame.clone())
+            CommandOut::Stamped(advertise(&mut node, &t.cmd, "geometry_msgs", "TwistStamped", command_out_qos())?)
         } else {
             CommandOut::Plain(advertise(&mut node, &t.cmd, "geometry_msgs", "Twist", command_out_qos())?)
         };
         let state: Publisher<StringMsg> = advertise(&mut node, &t.state, "std_msgs", "String", command_out_qos())?;
         let spinner = node.spinner().map_err(|e| format!("cannot start the node's spinner: {e:?}"))?;
         let shield = ShieldNode::new(params.clone()).map_err(|e| format!("shield: {e}"))?;
-        Ok((ctx, node, spinner, scan, cloud, odom, imu, nominal, nominal_stamped, cmd, state, shield))
+        let recorder = params.record.as_deref().map(|path| Recorder::create(path, &params)).transpose()?;
+        Ok((ctx, node, spinner, scan, cloud, odom, imu, nominal, nominal_stamped, cmd, state, shield, recorder))
     })();
-    let (ctx, node, spinner, scan, cloud, odom, imu, nominal, nominal_stamped, cmd, state, mut shield) = match setup {
+    let (ctx, node, spinner, scan, cloud, odom, imu, nominal, nominal_stamped, cmd, state, mut shield, recorder) = match setup {
         Ok(s) => {
             let _ = ready.send(Ok(()));
             s
@@ -226,16 +224,29 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
         .map_err(|e| format!("cannot start the spinner: {e}"))?;
 
     let mut quiet = Quiet::default();
+    // the recording: off after its first error (the commands go on)
+    let recorder = std::cell::RefCell::new(recorder);
+    let record = |f: &mut dyn FnMut(&mut Recorder) -> Result<(), String>, quiet: &mut Quiet| {
+        let mut slot = recorder.borrow_mut();
+        if let Some(Err(e)) = slot.as_mut().map(&mut *f) {
+            quiet.note(&format!("{e}; recording stopped"));
+            *slot = None;
+        }
+    };
     let publish = |out: Output, stamp: Option<Time>, quiet: &mut Quiet| {
         if let Some(r) = &out.state.reason {
             quiet.note(&format!("zero command: {r}"));
         } else {
             quiet.note("filtering");
         }
-        if let Err(e) = cmd.publish(out.command, stamp) {
+        // a stamped command carries the stamped nominal command's stamp, else the time of sending
+        let header = Header { stamp: stamp.unwrap_or_else(Time::now), frame_id: params.base_frame.clone() };
+        if let Err(e) = cmd.publish(out.command, header.clone()) {
             quiet.note(&format!("cannot publish the command: {e}"));
         }
-        let _ = state.publish(StringMsg { data: out.state.to_json() });
+        let json = out.state.to_json();
+        record(&mut |r| r.command(out.command, header.clone(), &json, now_ns()), quiet);
+        let _ = state.publish(StringMsg { data: json });
     };
 
     let main = async {
@@ -279,7 +290,10 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                 r = nominal_s.select_next_some() => {
                     let now = Instant::now();
                     let out = match r {
-                        Ok((m, _)) => shield.on_nominal(&m, now),
+                        Ok((m, _)) => {
+                            record(&mut |rec| rec.nominal(m, None, now_ns()), &mut quiet);
+                            shield.on_nominal(&m, now)
+                        }
                         Err(e) => shield.reject_nominal(format!("nominal Twist not decodable: {e}"), now),
                     };
                     publish(out, None, &mut quiet);
@@ -287,7 +301,10 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                 r = stamped_s.select_next_some() => {
                     let now = Instant::now();
                     let (out, stamp) = match r {
-                        Ok((m, _)) => (shield.on_nominal(&m.twist, now), Some(m.header.stamp)),
+                        Ok((m, _)) => {
+                            record(&mut |rec| rec.nominal(m.twist, Some(m.header.clone()), now_ns()), &mut quiet);
+                            (shield.on_nominal(&m.twist, now), Some(m.header.stamp))
+                        }
                         Err(e) => (shield.reject_nominal(format!("nominal TwistStamped not decodable: {e}"), now), None),
                     };
                     publish(out, stamp, &mut quiet);
@@ -301,7 +318,12 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
     };
     futures::executor::block_on(main);
     // a last zero command: the robot is not left with the last filtered one
-    let _ = cmd.publish(Twist::default(), None);
+    let _ = cmd.publish(Twist::default(), Header { stamp: Time::now(), frame_id: params.base_frame.clone() });
+    if let Some(r) = recorder.into_inner() {
+        if let Err(e) = r.finish() {
+            eprintln!("shieldnav-ros2: {e}");
+        }
+    }
     node.stop_spinner();
     drop(node);
     drop(ctx);

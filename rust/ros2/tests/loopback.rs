@@ -225,7 +225,15 @@ fn stamped_commands_in_and_out_over_loopback_dds() {
     let mut raw = RawParams::default();
     raw.set("domain_id", Value::Int(domain)).set("nominal_stamped", Value::Bool(true)).set("cmd_stamped", Value::Bool(true));
     raw.set("base_frame", Value::Str("chassis".into())).set("watchdog_rate", Value::Float(20.0));
+    let dir = std::env::temp_dir().join(format!("shieldnav-record-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let recording = dir.join("node.mcap");
+    let _ = std::fs::remove_file(&recording);
+    raw.set("record", Value::Str(recording.display().to_string()));
     let node = spawn(raw.build().expect("parameters")).expect("the node starts");
+    // a second node may not write over the recording
+    let e = spawn(raw.build().unwrap()).err().expect("an existing recording is refused");
+    assert!(e.contains("node.mcap") && e.contains("cannot create"), "{e}");
 
     let ctx = context(domain as u16).expect("participant");
     let mut n = ctx.new_node(NodeName::new("/", "fake_planner").unwrap(), NodeOptions::new().enable_rosout(false)).expect("node");
@@ -270,4 +278,49 @@ fn stamped_commands_in_and_out_over_loopback_dds() {
     assert_eq!(z.twist, Twist::default());
     assert!(z.header.stamp.sec > 1_600_000_000 && z.header.frame_id == "chassis", "{z:?}");
     node.stop().expect("the node stops cleanly");
+
+    // the node's recording: the ros2 profile, ros2msg schemas, CDR; what it heard and sent
+    let bytes = std::fs::read(&recording).expect("the recording");
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+    let mut topics: Vec<(String, String, String, String)> = summary
+        .channels
+        .values()
+        .map(|c| {
+            let s = c.schema.as_ref().unwrap();
+            (c.topic.clone(), c.message_encoding.clone(), s.name.clone(), s.encoding.clone())
+        })
+        .collect();
+    topics.sort();
+    assert_eq!(
+        topics,
+        [
+            ("/cmd_vel".into(), "cdr".into(), "geometry_msgs/msg/TwistStamped".into(), "ros2msg".into()),
+            ("/cmd_vel_nominal".into(), "cdr".into(), "geometry_msgs/msg/TwistStamped".into(), "ros2msg".into()),
+            ("/shieldnav/state".into(), "cdr".into(), "std_msgs/msg/String".into(), "ros2msg".into()),
+        ]
+    );
+    let decode = |data: &[u8]| {
+        assert_eq!(&data[..4], &[0, 1, 0, 0], "CDR little-endian encapsulation");
+        cdr_encoding::from_bytes::<TwistStamped, byteorder::LittleEndian>(&data[4..]).unwrap().0
+    };
+    let (mut heard, mut sent, mut states) = (0, Vec::new(), 0);
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        match m.channel.topic.as_str() {
+            "/cmd_vel_nominal" => {
+                assert_eq!(decode(&m.data), planned);
+                heard += 1;
+            }
+            "/cmd_vel" => sent.push(decode(&m.data)),
+            _ => {
+                let (s, _) = cdr_encoding::from_bytes::<StringMsg, byteorder::LittleEndian>(&m.data[4..]).unwrap();
+                assert!(serde_json::from_str::<serde_json::Value>(&s.data).is_ok());
+                states += 1;
+            }
+        }
+    }
+    assert!(heard > 0 && states == sent.len());
+    assert!(sent.iter().any(|c| c.header.stamp == stamp && c.header.frame_id == "chassis" && (c.twist.linear.x - 0.5).abs() < 1e-9));
+    assert!(sent.iter().any(|c| c.header.stamp != stamp && c.twist == Twist::default()), "the watchdog's zeros are recorded");
+    std::fs::remove_dir_all(&dir).ok();
 }
