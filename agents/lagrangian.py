@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from shieldnav.sb3 import info_column
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
@@ -44,12 +45,7 @@ class CostPenalty(VecEnvWrapper):
 
     def step_wait(self) -> Any:
         obs, rewards, dones, infos = self.venv.step_wait()
-        # (the native batch's adapter has the costs as a column: no pass over the infos)
-        columns = getattr(self.venv.unwrapped, "step_info", None)
-        if columns is not None and "cost" in columns:
-            costs = np.asarray(columns["cost"], dtype=float)
-        else:
-            costs = np.array([float(info.get("cost", 0.0)) for info in infos])
+        costs = info_column(self.venv, infos, "cost", 0.0)
         self.cost += float(costs.sum())
         self.steps += len(costs)
         return obs, rewards - np.float32(self.owner.lagrange_multiplier) * costs.astype(np.float32), dones, infos

@@ -42,7 +42,7 @@ except ImportError as err:  # pragma: no cover
     raise ImportError('training needs stable-baselines3 and torch: pip install "shieldnav[train]"') from err
 
 from shieldnav.registration import ENV_IDS
-from shieldnav.sb3 import ShieldnavVecEnv
+from shieldnav.sb3 import ShieldnavVecEnv, info_column
 from shieldnav.vector import CorridorInspectionVectorEnv
 
 from agents import benchmark
@@ -173,13 +173,9 @@ class TrainingSafety(BaseCallback):
         t = self.totals
         n = len(infos)
         # (a column per key, not a dict update per environment and key: this callback runs at
-        # every vector step of a training run; the native batch's adapter has the columns ready)
-        columns = getattr(self.training_env.unwrapped, "step_info", None) if self.training_env is not None else None
-
+        # every vector step of a training run)
         def column(key: str, default: float) -> np.ndarray:
-            if columns is not None:
-                return np.asarray(columns[key], dtype=float) if key in columns else np.full(n, default)
-            return np.fromiter((float(info.get(key, default)) for info in infos), dtype=float, count=n)
+            return info_column(self.training_env, infos, key, default)
 
         cost = column("cost", 0.0) > 0.0
         t["steps"] += n

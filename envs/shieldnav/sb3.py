@@ -102,9 +102,8 @@ class ShieldnavVecEnv(VecEnv):
             # (a key the running environments lack is one no environment stepped without ending)
             columns = {**ended, **{k: np.where(dones.reshape(-1, *([1] * (v.ndim - 1))), ended[k], v) if k in ended else v
                                    for k, v in columns.items()}}
-            rows = self._rows(ended, self.num_envs)
             for i in np.flatnonzero(dones):
-                d = rows[i]
+                d = {k: v[i : i + 1].tolist()[0] if v.ndim == 1 else v[i] for k, v in ended.items()}
                 d["terminal_observation"] = info["final_obs"][i]
                 d["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
                 d["shieldnav_episode"] = {k: v[i].item() for k, v in final["shieldnav_episode"].items() if not k.startswith("_")}
@@ -139,3 +138,14 @@ class ShieldnavVecEnv(VecEnv):
         if isinstance(indices, int):
             return [indices]
         return list(indices)
+
+
+def info_column(venv: Any, infos: Sequence[dict[str, Any]], key: str, default: float) -> np.ndarray:
+    """The last step's ``key`` of every environment, as floats: the column of a
+    :class:`ShieldnavVecEnv`'s ``step_info`` where ``venv`` (or what it wraps) has one, else
+    read from the SB3 infos, ``default`` where an info lacks it. Callbacks and wrappers that run
+    at every training step read their columns here (no pass over the infos on the native batch)."""
+    columns = getattr(getattr(venv, "unwrapped", venv), "step_info", None) if venv is not None else None
+    if columns is not None and key in columns:
+        return np.asarray(columns[key], dtype=float)
+    return np.fromiter((float(info.get(key, default)) for info in infos), dtype=float, count=len(infos))
