@@ -27,7 +27,7 @@ from shieldnav.exceptions import InvalidArgumentError
 #: The node's shield parameters the environment's configuration holds under the same names.
 SHARED = ("semi_axes", "gamma", "kappa", "alpha", "crop_radius", "safety_distance", "height_band", "voxel_size", "angular_bins", "grad_eps",
           "tracker_tau", "a_max", "w_max", "yaw_accel_max", "dt", "brake_margin", "lidar_noise_std", "tight_speed", "rotation_weight",
-          "stop_when_infeasible")
+          "stop_when_infeasible", "track_movers", "mover_min_speed", "mover_max_size", "mover_max_range", "mover_accel")
 
 
 def _yaml(v: Any) -> str:

@@ -5,6 +5,7 @@
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
+use shieldnav_core::sensors::{Mover, MoverTracker};
 use shieldnav_core::shield::{BodyState, Motion, Scan, Shield, ShieldMethod, ShieldOutcome};
 use shieldnav_core::world::Pose2;
 
@@ -120,6 +121,8 @@ pub struct State {
     pub clearance: Option<f64>,
     /// Points the shield used (after crop, band and down-sampling).
     pub points_used: usize,
+    /// Moving objects tracked in the scan held (each kept from the robot's path).
+    pub movers: usize,
     /// Returns in the scan held, before the shield's crop.
     pub points_in_scan: usize,
     /// The frame of the scan held.
@@ -164,12 +167,21 @@ pub struct ShieldNode {
     imu_omega: Held<[f64; 3]>,
     nominal: Held<Twist>,
     reckoning: Reckoning,
+    /// The mover tracker (when `track_movers`), the beams it segments, the movers of the held
+    /// scan (its frame) and as the shield takes them now.
+    tracker: Option<MoverTracker>,
+    beam_points: Vec<[f64; 3]>,
+    movers_scan: Vec<Mover>,
+    movers_now: Vec<Mover>,
+    /// The tracker's clock: the first scan's arrival.
+    origin: Option<Instant>,
 }
 
 impl ShieldNode {
     /// A node with checked parameters (see [`crate::params::RawParams::build`]).
     pub fn new(params: NodeParams) -> Result<Self, shieldnav_core::Error> {
         let shield = Shield::new(params.shield.clone())?;
+        let tracker = params.movers.map(MoverTracker::new).transpose()?;
         Ok(Self {
             params,
             shield,
@@ -180,6 +192,11 @@ impl ShieldNode {
             imu_omega: Held::Missing,
             nominal: Held::Missing,
             reckoning: Reckoning::default(),
+            tracker,
+            beam_points: Vec::new(),
+            movers_scan: Vec::new(),
+            movers_now: Vec::new(),
+            origin: None,
         })
     }
 
@@ -205,13 +222,36 @@ impl ShieldNode {
     /// arrives. Returns the reason it was rejected.
     pub fn on_scan(&mut self, msg: &LaserScan, now: Instant) -> Result<(), Rejection> {
         self.points.clear();
-        let r = self.check_frame(&msg.header.frame_id).and_then(|_| self.check_invalid(msg)).and_then(|_| laser_scan_points_with(msg, &self.params.mount, &mut self.beams, &mut self.points));
-        self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n, pose: self.reckoning.at(now) }), now)
+        self.beam_points.clear();
+        let r = self.check_frame(&msg.header.frame_id).and_then(|_| self.check_invalid(msg)).and_then(|_| {
+            let beams = self.tracker.is_some().then_some(&mut self.beam_points);
+            laser_scan_points_with(msg, &self.params.mount, &mut self.beams, &mut self.points, beams)
+        });
+        let pose = self.reckoning.at(now);
+        if r.is_ok() {
+            self.track(pose, now);
+        }
+        self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n, pose }), now)
+    }
+
+    /// The mover tracker on the scan's beams, with the dead-reckoned pose: the movers of the
+    /// scan, in its frame. (A cloud is not tracked: its points are taken as static.)
+    fn track(&mut self, pose: Pose2, now: Instant) {
+        self.movers_scan.clear();
+        let Some(tracker) = self.tracker.as_mut() else { return };
+        let origin = *self.origin.get_or_insert(now);
+        let time = now.saturating_duration_since(origin).as_secs_f64();
+        match tracker.update(&self.beam_points, pose, time) {
+            Ok(movers) => self.movers_scan.extend_from_slice(movers),
+            // (a scan at the same arrival time as the last: the tracks start over)
+            Err(_) => tracker.reset(),
+        }
     }
 
     /// Takes a point cloud that arrived at `now` (as [`ShieldNode::on_scan`]).
     pub fn on_cloud(&mut self, msg: &PointCloud2, now: Instant) -> Result<(), Rejection> {
         self.points.clear();
+        self.movers_scan.clear();
         let r = self.check_frame(&msg.header.frame_id).and_then(|_| point_cloud_points(msg, &self.params.mount, &mut self.points));
         self.hold_scan(r.map(|n| ScanInfo { frame: msg.header.frame_id.clone(), points: n, pose: self.reckoning.at(now) }), now)
     }
@@ -235,6 +275,7 @@ impl ShieldNode {
             }
             Err(reason) => {
                 self.points.clear();
+                self.movers_scan.clear();
                 self.scan = Held::Rejected(reason.clone());
                 Err(reason)
             }
@@ -244,6 +285,7 @@ impl ShieldNode {
     /// A scan or cloud that could not even be decoded.
     pub fn reject_scan(&mut self, reason: Rejection) {
         self.points.clear();
+        self.movers_scan.clear();
         self.scan = Held::Rejected(reason);
     }
 
@@ -332,6 +374,7 @@ impl ShieldNode {
                 tight: false,
                 clearance: None,
                 points_used: 0,
+                movers: 0,
                 points_in_scan,
                 scan_frame,
                 scan_age,
@@ -390,12 +433,17 @@ impl ShieldNode {
         }
         .map_err(|e| format!("body state: {e}"))?;
         let mut scan = Scan::new_f64(&self.points, 3).map_err(|e| format!("scan: {e}"))?;
+        self.movers_now.clear();
         if dim == 2 {
-            // the scan moved into the body frame of now by the motion measured since it arrived
+            // the scan moved into the body frame of now by the motion measured since it arrived,
+            // its movers along their tracks as well
             let rel = self.reckoning.at(now).between(&info.pose);
             if rel != Pose2::default() {
                 scan = scan.moved(Motion::planar(rel.yaw, rel.x, rel.y));
             }
+            let age = now.saturating_duration_since(at).as_secs_f64();
+            self.movers_now.extend(self.movers_scan.iter().map(|m| m.advanced(age).moved(rel.yaw, rel.x, rel.y)));
+            scan = scan.with_movers(&self.movers_now);
         }
         let out: ShieldOutcome = self.shield.filter(&scan, &state, u_nom).map_err(|e| format!("shield: {e}"))?;
         // the planar braking shield's command passed its braking check whatever the row said
@@ -434,6 +482,7 @@ impl ShieldNode {
                 tight: out.tight,
                 clearance: (out.clearance.is_finite() && out.clearance < f64::MAX).then_some(out.clearance),
                 points_used: out.num_points,
+                movers: self.movers_now.len(),
                 points_in_scan: info.points,
                 scan_frame: Some(info.frame),
                 scan_age: Some(now.saturating_duration_since(at).as_secs_f64()),

@@ -7,6 +7,7 @@ use std::fmt;
 use std::time::Duration;
 
 use shieldnav_core::robot::TrackerConfig;
+use shieldnav_core::sensors::MoverTrackerConfig;
 use shieldnav_core::shield::{BrakingModel, Footprint, ScanFilter, Shield, ShieldConfig, ShieldMethod};
 use yaml_rust2::{Yaml, YamlLoader};
 
@@ -93,6 +94,11 @@ pub const PARAMETERS: &[(&str, &str)] = &[
     ("footprint", "braking model: the body's convex outline, Nav2's convention: \"[[x, y], [x, y], ...]\" in m, body frame (default: 1.1 x 0.5 m)"),
     ("tight_speed", "braking shield: speed up to which the nominal command is followed where the ellipse stalls but the footprint passes, m/s (default 0.5)"),
     ("rotation_weight", "braking shield: weight of a change of ω against one of v (default 4)"),
+    ("track_movers", "track small moving objects in the LaserScan (segments, a constant-velocity Kalman track each) and keep the robot from driving into their predicted paths (default true)"),
+    ("mover_min_speed", "slowest object speed reported as moving, m/s (default 0.3)"),
+    ("mover_max_size", "larger segments are structure, never movers, m (default 1.2)"),
+    ("mover_max_range", "objects farther from the sensor are not tracked, m (default 6)"),
+    ("mover_accel", "braking shield: the acceleration a mover may add toward the robot, m/s² (default 0.25)"),
     ("stop_when_infeasible", "send zero when the constraints cannot be met (the planar braking shield excepted: its braking check decides) (default true)"),
     ("scan_topic", "sensor_msgs/LaserScan in; empty: none (default /scan)"),
     ("cloud_topic", "sensor_msgs/PointCloud2 in; empty: none (default empty)"),
@@ -156,6 +162,8 @@ pub struct NodeParams {
     pub domain_id: u16,
     /// The MCAP file the node records to; `None` when off.
     pub record: Option<std::path::PathBuf>,
+    /// The mover tracker's parameters; `None` when off.
+    pub movers: Option<MoverTrackerConfig>,
 }
 
 /// The node's topics.
@@ -336,8 +344,7 @@ impl RawParams {
             },
             rotation_weight: g.float("rotation_weight", d.rotation_weight)?,
             tight_speed: g.float("tight_speed", d.tight_speed)?,
-            // (the node tracks no movers: its scans are taken as static)
-            mover_accel: d.mover_accel,
+            mover_accel: g.float("mover_accel", d.mover_accel)?,
         };
         // the core's checks, whose errors name the field (its names are the parameters')
         Shield::new(shield.clone()).map_err(core_error)?;
@@ -386,6 +393,18 @@ impl RawParams {
         if !(0..=232).contains(&domain) {
             return Err(ParamError::new("domain_id", format!("must be from 0 to 232, got {domain}")));
         }
+        let movers = if g.bool("track_movers", true)? {
+            let d = MoverTrackerConfig::default();
+            let m =
+                MoverTrackerConfig { min_speed: g.float("mover_min_speed", d.min_speed)?, max_size: g.float("mover_max_size", d.max_size)?, max_range: g.float("mover_max_range", d.max_range)?, ..d };
+            m.validate().map_err(|e| match e {
+                shieldnav_core::Error::InvalidArgument { name, reason } => ParamError::new(if name.starts_with("mover_") { name.to_string() } else { format!("mover_{name}") }, reason),
+                other => ParamError::new("track_movers", other.to_string()),
+            })?;
+            Some(m)
+        } else {
+            None
+        };
         let sensor_frame = g.string("sensor_frame", "")?;
         let base_frame = g.string("base_frame", "base_link")?;
         if base_frame.is_empty() || base_frame.contains(char::is_whitespace) {
@@ -413,6 +432,7 @@ impl RawParams {
             mount,
             domain_id: domain as u16,
             record: Some(g.string("record", "")?).filter(|r| !r.is_empty()).map(std::path::PathBuf::from),
+            movers,
         })
     }
 }

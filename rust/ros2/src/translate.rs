@@ -82,11 +82,13 @@ impl BeamTable {
 /// range limits are not finite numbers, its increment is zero, its beam count disagrees with
 /// its angles by more than one beam, or its intensities are neither empty nor one per range.
 pub fn laser_scan_points(msg: &LaserScan, mount: &Mount, out: &mut Vec<f64>) -> Result<usize, Rejection> {
-    laser_scan_points_with(msg, mount, &mut BeamTable::default(), out)
+    laser_scan_points_with(msg, mount, &mut BeamTable::default(), out, None)
 }
 
-/// [`laser_scan_points`] with the beams' directions kept in `table` from call to call.
-pub fn laser_scan_points_with(msg: &LaserScan, mount: &Mount, table: &mut BeamTable, out: &mut Vec<f64>) -> Result<usize, Rejection> {
+/// [`laser_scan_points`] with the beams' directions kept in `table` from call to call; with
+/// `beams`, every beam's point in beam order as well (NaN where there is no return: what the
+/// mover tracker segments).
+pub fn laser_scan_points_with(msg: &LaserScan, mount: &Mount, table: &mut BeamTable, out: &mut Vec<f64>, mut beams: Option<&mut Vec<[f64; 3]>>) -> Result<usize, Rejection> {
     let (a0, a1, da) = (msg.angle_min as f64, msg.angle_max as f64, msg.angle_increment as f64);
     if !(a0.is_finite() && a1.is_finite() && da.is_finite()) {
         return Err(format!("LaserScan angles are not finite (angle_min {a0}, angle_max {a1}, angle_increment {da})"));
@@ -124,9 +126,16 @@ pub fn laser_scan_points_with(msg: &LaserScan, mount: &Mount, table: &mut BeamTa
         } else if r.is_finite() && r >= rmin && r <= rmax {
             r
         } else {
+            if let Some(b) = beams.as_mut() {
+                b.push([f64::NAN; 3]);
+            }
             continue;
         };
-        out.extend_from_slice(&[t[0] + r * d[0], t[1] + r * d[1], t[2]]);
+        let p = [t[0] + r * d[0], t[1] + r * d[1], t[2]];
+        out.extend_from_slice(&p);
+        if let Some(b) = beams.as_mut() {
+            b.push(p);
+        }
     }
     Ok((out.len() - start) / 3)
 }
