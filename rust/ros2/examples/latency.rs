@@ -1,6 +1,9 @@
 //! Message-in → command-out latency of the node over loopback DDS, against a bare echo.
 //!
-//! `cargo run --release -p shieldnav-ros2 --example latency [-- ITERATIONS [METHOD [RATE_HZ]]]`
+//! `cargo run --release -p shieldnav-ros2 --example latency [-- ITERATIONS [METHOD [RATE_HZ [RUNS]]]]`
+//!
+//! `RATE_HZ` 0 or absent: each message once the last was answered. `RUNS`: a comma-separated
+//! choice of `scan`, `twist`, `echo-scan`, `echo-twist` (default all four).
 //!
 //! Two messages in, each answered by one command out:
 //! - a 1024-beam `LaserScan` (8 KB, sent in fragments): the node runs with `filter_on_scan:
@@ -144,6 +147,12 @@ fn main() {
     let method = args.get(1).cloned().unwrap_or_else(|| "braking".into());
     let rate: Option<f64> = args.get(2).and_then(|s| s.parse().ok()).filter(|r: &f64| *r > 0.0);
     let period = rate.map(|r| Duration::from_secs_f64(1.0 / r));
+    let runs: Vec<String> = args.get(3).map_or_else(|| vec!["scan".into(), "twist".into(), "echo-scan".into(), "echo-twist".into()], |r| r.split(',').map(str::to_owned).collect());
+    if let Some(bad) = runs.iter().find(|r| !["scan", "twist", "echo-scan", "echo-twist"].contains(&r.as_str())) {
+        eprintln!("latency: unknown run {bad:?} (scan, twist, echo-scan, echo-twist)");
+        std::process::exit(2);
+    }
+    let wanted = |r: &str| runs.iter().any(|x| x == r);
     let domain = 100 + (std::process::id() % 100) as i64;
     let mut raw = RawParams::default();
     raw.set("domain_id", Value::Int(domain))
@@ -161,14 +170,17 @@ fn main() {
     local.on_odometry(&Odometry::default(), t).unwrap();
     local.on_nominal(&nominal(0), t);
     let mut in_node = Vec::new();
+    let mut shield_only = Vec::new();
     for k in 0..iterations {
         let scan = corridor(1e-4 * (k % 50) as f64);
         let start = Instant::now();
         local.on_scan(&scan, start).unwrap();
         let out = local.command(start);
         in_node.push(start.elapsed().as_secs_f64() * 1e6);
+        shield_only.push(out.state.solve_time_us);
         assert!(out.state.ok, "{:?}", out.state);
     }
+    shield_only.sort_by(f64::total_cmp);
 
     let node = spawn(params).expect("the node starts");
     let ctx = context(domain as u16).expect("participant");
@@ -186,8 +198,8 @@ fn main() {
         },
         &cmd_sub,
     );
-    let scans = round_trips(iterations, period, |k| drop(scan_pub.publish(corridor(1e-4 * (k % 50) as f64))), &cmd_sub);
-    let twists = round_trips(iterations, period, |k| drop(nominal_pub.publish(nominal(k))), &cmd_sub);
+    let scans = wanted("scan").then(|| round_trips(iterations, period, |k| drop(scan_pub.publish(corridor(1e-4 * (k % 50) as f64))), &cmd_sub));
+    let twists = wanted("twist").then(|| round_trips(iterations, period, |k| drop(nominal_pub.publish(nominal(k))), &cmd_sub));
     drop(n);
     node.stop().expect("the node stops");
 
@@ -223,8 +235,8 @@ fn main() {
         },
         &pong,
     );
-    let echo_scans = round_trips(iterations, period, |k| drop(ping_scan.publish(corridor(1e-4 * (k % 50) as f64))), &pong);
-    let echo_twists = round_trips(iterations, period, |k| drop(ping_twist.publish(nominal(k))), &pong);
+    let echo_scans = wanted("echo-scan").then(|| round_trips(iterations, period, |k| drop(ping_scan.publish(corridor(1e-4 * (k % 50) as f64))), &pong));
+    let echo_twists = wanted("echo-twist").then(|| round_trips(iterations, period, |k| drop(ping_twist.publish(nominal(k))), &pong));
     let _ = ping_scan.publish(LaserScan::default());
     let _ = ping_scan.publish(LaserScan::default());
 
@@ -233,11 +245,13 @@ fn main() {
     println!("shieldnav-ros2 over loopback DDS, method {method}, {iterations} messages each, {pace}\n");
     println!("| round trip | median (µs) | p90 (µs) | p99 (µs) | unanswered | late |");
     println!("|---|---:|---:|---:|---:|---:|");
-    println!("{}", scans.row(&format!("{BEAMS}-beam LaserScan → node → Twist")));
-    println!("{}", echo_scans.row(&format!("{BEAMS}-beam LaserScan → echo → Twist")));
-    println!("{}", twists.row("Twist (48 B) → node → Twist"));
-    println!("{}", echo_twists.row("Twist (48 B) → echo → Twist"));
-    println!("\nin the node without DDS (scan → command): median {:.0} µs, p99 {:.0} µs", percentile(&in_node, 0.5), percentile(&in_node, 0.99));
+    let scan_name = format!("{BEAMS}-beam LaserScan");
+    for (trips, what) in [(scans, format!("{scan_name} → node → Twist")), (echo_scans, format!("{scan_name} → echo → Twist")), (twists, "Twist (48 B) → node → Twist".into()), (echo_twists, "Twist (48 B) → echo → Twist".into())] {
+        if let Some(t) = trips {
+            println!("{}", t.row(&what));
+        }
+    }
+    println!("\nin the node without DDS (scan → command): median {:.0} µs, p99 {:.0} µs; of which the shield {:.0} µs, {:.0} µs", percentile(&in_node, 0.5), percentile(&in_node, 0.99), percentile(&shield_only, 0.5), percentile(&shield_only, 0.99));
     drop(n);
     let _ = echo.join();
 }
