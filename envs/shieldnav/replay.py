@@ -103,10 +103,7 @@ class Replay:
         when no clearance was measured)."""
         if self.closest is None:
             return None
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt = _pyplot()
         from matplotlib.patches import Ellipse, Polygon
 
         k, pts = self.closest["k"], self.closest["points"]
@@ -127,18 +124,11 @@ class Replay:
         ax.set_ylabel("y (m)")
         ax.legend(loc="upper right", fontsize=8)
         ax.set_title(f"closest approach: {self.table['clearance'][k]:.3f} m at {self.table['t'][k]:.2f} s ({self.summary['method']})")
-        fig.tight_layout()
-        path = Path(path)
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
-        return path
+        return _save(fig, path)
 
     def plot(self, path: str | Path) -> Path:
         """Commands (nominal and sent), ``H`` and ``h_min`` and the clearance over time, one PNG."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt = _pyplot()
 
         t, tab = self.table["t"], self.table
         fig, axes = plt.subplots(4, 1, figsize=(10, 9), sharex=True)
@@ -157,11 +147,24 @@ class Replay:
         for k in np.flatnonzero(~tab["ok"]):
             axes[0].axvline(t[k], color="C3", alpha=0.15, lw=1)
         fig.suptitle(f"shieldnav replay: {self.summary['bag']} ({self.summary['method']})")
-        fig.tight_layout()
-        path = Path(path)
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
-        return path
+        return _save(fig, path)
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig: Any, path: str | Path) -> Path:
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=100)
+    _pyplot().close(fig)
+    return path
 
 
 def _reader(paths: Sequence[Path]) -> Any:
