@@ -246,12 +246,23 @@ fn main() {
     println!("| round trip | median (µs) | p90 (µs) | p99 (µs) | unanswered | late |");
     println!("|---|---:|---:|---:|---:|---:|");
     let scan_name = format!("{BEAMS}-beam LaserScan");
-    for (trips, what) in [(scans, format!("{scan_name} → node → Twist")), (echo_scans, format!("{scan_name} → echo → Twist")), (twists, "Twist (48 B) → node → Twist".into()), (echo_twists, "Twist (48 B) → echo → Twist".into())] {
+    for (trips, what) in [
+        (scans, format!("{scan_name} → node → Twist")),
+        (echo_scans, format!("{scan_name} → echo → Twist")),
+        (twists, "Twist (48 B) → node → Twist".into()),
+        (echo_twists, "Twist (48 B) → echo → Twist".into()),
+    ] {
         if let Some(t) = trips {
             println!("{}", t.row(&what));
         }
     }
-    println!("\nin the node without DDS (scan → command): median {:.0} µs, p99 {:.0} µs; of which the shield {:.0} µs, {:.0} µs", percentile(&in_node, 0.5), percentile(&in_node, 0.99), percentile(&shield_only, 0.5), percentile(&shield_only, 0.99));
+    println!(
+        "\nin the node without DDS (scan → command): median {:.0} µs, p99 {:.0} µs; of which the shield {:.0} µs, {:.0} µs",
+        percentile(&in_node, 0.5),
+        percentile(&in_node, 0.99),
+        percentile(&shield_only, 0.5),
+        percentile(&shield_only, 0.99)
+    );
     drop(n);
     let _ = echo.join();
 }
