@@ -290,6 +290,10 @@ def test_the_sensor_mount_is_read_from_tf_static(tmp_path):
     unmounted = replay(bag, tf=False)
     assert unmounted.summary["mount"]["xyz_yaw"] == [0.0, 0.0, 0.0, 0.0]
     assert not np.array_equal(result.table["command"], unmounted.table["command"])
+    # the node's command line may name its file as a Path
+    params = tmp_path / "shield.yaml"
+    params.write_text("/**:\n  ros__parameters:\n    method: braking\n")
+    assert replay(bag, node_args=["--params", params]).summary["mount"] == mount
     # a mount in the parameters wins over /tf_static
     assert replay(bag, node_args=["-p", "mount_x:=0.5"]).summary["mount"] == {"source": "parameters", "xyz_yaw": [0.5, 0.0, 0.0, 0.0]}
     # an upside-down LIDAR cannot be a planar mount: a clear error, not a silently mirrored scan

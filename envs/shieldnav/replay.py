@@ -176,14 +176,14 @@ def _reader(paths: Sequence[Path]) -> Any:
     return AnyReader(list(paths), default_typestore=get_typestore(Stores.ROS2_JAZZY))
 
 
-def _remaps(node_args: Sequence[str], topics: Mapping[str, str] | None) -> list[str]:
+def _remaps(node_args: list[str], topics: Mapping[str, str] | None) -> list[str]:
     """The node's command line's ``-r`` remaps that read each input from ``topics``."""
     if not topics:
         return []
     unknown = set(topics) - set(TYPES)
     if unknown:
         raise InvalidArgumentError(f"invalid `topics`: unknown inputs {sorted(unknown)} (known: {sorted(TYPES)})")
-    current = Node([str(a) for a in node_args]).topics()
+    current = Node(node_args).topics()
     remaps: list[str] = ["--ros-args"]
     for kind, topic in topics.items():
         if not isinstance(topic, str) or not topic.startswith("/"):
@@ -192,11 +192,6 @@ def _remaps(node_args: Sequence[str], topics: Mapping[str, str] | None) -> list[
             raise InvalidArgumentError(f"invalid `topics`: the node's {kind} input is switched off by its parameters")
         remaps += ["-r", f"{current[kind]}:={topic}"]
     return remaps
-
-
-def _node(node_args: Sequence[str], topics: Mapping[str, str] | None) -> Node:
-    args = [str(a) for a in node_args]
-    return Node([*args, *_remaps(args, topics)])
 
 
 def _mounted(reader: Any, node: Node, args: list[str], wanted: dict[str, str]) -> tuple[Node, str]:
@@ -239,7 +234,10 @@ def replay(bag: str | Path, node_args: Sequence[str] = (), topics: Mapping[str, 
             raise InvalidArgumentError(f"invalid `{name}`: seconds from the recording's start, finite and ≥ 0, got {value!r}")
     if start is not None and end is not None and end <= start:
         raise InvalidArgumentError(f"invalid `end`: must be after `start` ({start} s), got {end} s")
-    node = _node(node_args, topics)
+    # the node's command line with the remaps: built once more below only for a /tf_static mount
+    args = [str(a) for a in node_args]
+    args += _remaps(args, topics)
+    node = Node(args)
     wanted = {k: v for k, v in node.topics().items() if k in TYPES and v}
     path = Path(bag)
     if not path.exists():
@@ -248,7 +246,7 @@ def replay(bag: str | Path, node_args: Sequence[str] = (), topics: Mapping[str, 
 
     try:
         with _reader([path]) as reader:
-            node, mount_source = _mounted(reader, node, [*node_args, *_remaps(node_args, topics)], wanted) if tf else (node, "parameters")
+            node, mount_source = _mounted(reader, node, args, wanted) if tf else (node, "parameters")
             result = _run(reader, node, wanted, path, start, end)
             result.summary["mount"] = {"source": mount_source, "xyz_yaw": list(result.body["mount"])}
             return result

@@ -75,8 +75,8 @@ impl Recorder {
     fn write<M: Serialize>(&mut self, channel: u16, msg: &M, log_time: u64) -> Result<(), String> {
         self.buffer.clear();
         self.buffer.extend_from_slice(&CDR_LE);
-        let body = cdr_encoding::to_vec::<M, LittleEndian>(msg).map_err(|e| format!("record: cannot serialize: {e}"))?;
-        self.buffer.extend_from_slice(&body);
+        // (CDR aligns from the payload's start, which the serializer counts from)
+        cdr_encoding::to_writer::<M, LittleEndian, _>(&mut self.buffer, msg).map_err(|e| format!("record: cannot serialize: {e}"))?;
         self.sequence = self.sequence.wrapping_add(1);
         let header = mcap::records::MessageHeader { channel_id: channel, sequence: self.sequence, log_time, publish_time: log_time };
         self.writer.write_to_known_channel(&header, &self.buffer).map_err(|e| format!("record: cannot write: {e}"))

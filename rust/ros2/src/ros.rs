@@ -58,6 +58,14 @@ pub fn advertise<M: Serialize>(node: &mut Node, name: &str, package: &str, type_
     node.create_publisher(&t, Some(qos)).map_err(|e| format!("publisher on {name:?}: {e:?}"))
 }
 
+/// A nominal command the node answered: its twist, its header when stamped, and when it came
+/// (ns since the epoch, its log time in the recording).
+struct Heard {
+    twist: Twist,
+    header: Option<Header>,
+    at: u64,
+}
+
 /// The filtered command's publisher: `Twist`, or `TwistStamped`.
 enum CommandOut {
     Plain(Publisher<Twist>),
@@ -224,28 +232,30 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
         .map_err(|e| format!("cannot start the spinner: {e}"))?;
 
     let mut quiet = Quiet::default();
-    // the recording: off after its first error (the commands go on)
-    let recorder = std::cell::RefCell::new(recorder);
-    let record = |f: &mut dyn FnMut(&mut Recorder) -> Result<(), String>, quiet: &mut Quiet| {
-        let mut slot = recorder.borrow_mut();
-        if let Some(Err(e)) = slot.as_mut().map(&mut *f) {
-            quiet.note(&format!("{e}; recording stopped"));
-            *slot = None;
-        }
-    };
-    let publish = |out: Output, stamp: Option<Time>, quiet: &mut Quiet| {
+    let mut recording = recorder;
+    // `heard`: the nominal command answered (its twist, its header if stamped, when it came)
+    let publish = |out: Output, heard: Option<Heard>, quiet: &mut Quiet, recording: &mut Option<Recorder>| {
         if let Some(r) = &out.state.reason {
             quiet.note(&format!("zero command: {r}"));
         } else {
             quiet.note("filtering");
         }
         // a stamped command carries the stamped nominal command's stamp, else the time of sending
+        let stamp = heard.as_ref().and_then(|h| h.header.as_ref()).map(|h| h.stamp);
         let header = Header { stamp: stamp.unwrap_or_else(Time::now), frame_id: params.base_frame.clone() };
         if let Err(e) = cmd.publish(out.command, header.clone()) {
             quiet.note(&format!("cannot publish the command: {e}"));
         }
         let json = out.state.to_json();
-        record(&mut |r| r.command(out.command, header.clone(), &json, now_ns()), quiet);
+        // the recording once the command is out (its writes stay off the command's path); off
+        // after its first error, the commands go on
+        if let Some(r) = recording.as_mut() {
+            let written = heard.map_or(Ok(()), |h| r.nominal(h.twist, h.header, h.at)).and_then(|_| r.command(out.command, header, &json, now_ns()));
+            if let Err(e) = written {
+                quiet.note(&format!("{e}; recording stopped"));
+                *recording = None;
+            }
+        }
         let _ = state.publish(StringMsg { data: json });
     };
 
@@ -262,7 +272,7 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                         shield.reject_scan(e.clone());
                         quiet.note(&format!("scan rejected: {e}"));
                     }
-                    if params.filter_on_scan { publish(shield.command(now), None, &mut quiet) }
+                    if params.filter_on_scan { publish(shield.command(now), None, &mut quiet, &mut recording) }
                 }
                 r = cloud_s.select_next_some() => {
                     let now = Instant::now();
@@ -271,7 +281,7 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                         shield.reject_scan(e.clone());
                         quiet.note(&format!("cloud rejected: {e}"));
                     }
-                    if params.filter_on_scan { publish(shield.command(now), None, &mut quiet) }
+                    if params.filter_on_scan { publish(shield.command(now), None, &mut quiet, &mut recording) }
                 }
                 r = odom_s.select_next_some() => {
                     let r = r.map_err(|e| format!("Odometry not decodable: {e}")).and_then(|(m, _)| shield.on_odometry(&m, Instant::now()));
@@ -289,28 +299,22 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
                 }
                 r = nominal_s.select_next_some() => {
                     let now = Instant::now();
-                    let out = match r {
-                        Ok((m, _)) => {
-                            record(&mut |rec| rec.nominal(m, None, now_ns()), &mut quiet);
-                            shield.on_nominal(&m, now)
-                        }
-                        Err(e) => shield.reject_nominal(format!("nominal Twist not decodable: {e}"), now),
+                    let (out, heard) = match r {
+                        Ok((m, _)) => (shield.on_nominal(&m, now), Some(Heard { twist: m, header: None, at: now_ns() })),
+                        Err(e) => (shield.reject_nominal(format!("nominal Twist not decodable: {e}"), now), None),
                     };
-                    publish(out, None, &mut quiet);
+                    publish(out, heard, &mut quiet, &mut recording);
                 }
                 r = stamped_s.select_next_some() => {
                     let now = Instant::now();
-                    let (out, stamp) = match r {
-                        Ok((m, _)) => {
-                            record(&mut |rec| rec.nominal(m.twist, Some(m.header.clone()), now_ns()), &mut quiet);
-                            (shield.on_nominal(&m.twist, now), Some(m.header.stamp))
-                        }
+                    let (out, heard) = match r {
+                        Ok((m, _)) => (shield.on_nominal(&m.twist, now), Some(Heard { twist: m.twist, header: Some(m.header), at: now_ns() })),
                         Err(e) => (shield.reject_nominal(format!("nominal TwistStamped not decodable: {e}"), now), None),
                     };
-                    publish(out, stamp, &mut quiet);
+                    publish(out, heard, &mut quiet, &mut recording);
                 }
                 _ = ticks.select_next_some() => {
-                    if let Some(out) = shield.tick(Instant::now()) { publish(out, None, &mut quiet) }
+                    if let Some(out) = shield.tick(Instant::now()) { publish(out, None, &mut quiet, &mut recording) }
                 }
                 _ = stop => break,
             }
@@ -319,7 +323,7 @@ pub fn run(params: NodeParams, stop: oneshot::Receiver<()>, ready: mpsc::Sender<
     futures::executor::block_on(main);
     // a last zero command: the robot is not left with the last filtered one
     let _ = cmd.publish(Twist::default(), Header { stamp: Time::now(), frame_id: params.base_frame.clone() });
-    if let Some(r) = recorder.into_inner() {
+    if let Some(r) = recording {
         if let Err(e) = r.finish() {
             eprintln!("shieldnav-ros2: {e}");
         }
